@@ -1,0 +1,66 @@
+"""``granudep`` command line: one sub-command per stage, each registered by its own subpackage.
+
+Each stage module ``granudep.<stage>.cli`` exposes ``register(subparsers)`` which adds its
+sub-parser and sets ``func`` (a callable taking the parsed args and returning an exit code).
+Bad input (``ConfigError``) is printed as one clear line and exits with status 2 before any work.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from ._version import __version__
+from .config import ConfigError
+from .progress import LOG, setup_logging
+
+#: stage modules providing sub-commands, in the paper's order
+STAGES = ("granudep.da.cli", "granudep.isph.cli", "granudep.monitor.cli", "granudep.regress.cli",
+          "granudep.figures.cli")
+
+
+def _cmd_cases(args) -> int:
+    from .cases import list_cases
+    import pandas as pd
+    with pd.option_context("display.width", 120, "display.max_rows", 100):
+        print(list_cases().to_string(index=False))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="granudep", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"granudep {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    p = sub.add_parser("cases", help="list the paper's named cases (Tables 1 and 5)")
+    p.set_defaults(func=_cmd_cases)
+    for name in STAGES:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name == name:  # stage not built yet
+                continue
+            raise
+        module.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    setup_logging(args.verbose)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except ConfigError as exc:
+        print(f"granudep: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        LOG.error("interrupted")
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,208 @@
+"""Configuration as data: typed dataclasses loaded from YAML, validated once at the edge.
+
+Every stage defines its own (frozen) dataclasses and builds them with :func:`build`, which
+
+* refuses unknown keys (naming the full dotted key and the allowed ones),
+* checks types (``int`` accepted where ``float`` is declared, nothing else coerced),
+* checks ranges declared in field metadata with :func:`param`,
+* recurses into nested dataclasses.
+
+Any violation raises :class:`ConfigError` with a one-line message such as::
+
+    geometry.H0: must be > 0 (got -0.1)
+
+so the CLI can print it and exit before any work starts.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import types
+import typing
+from pathlib import Path
+from typing import Any, Mapping
+
+import yaml
+
+
+class ConfigError(ValueError):
+    """Bad user input: the message names the key and the allowed range."""
+
+
+def param(default: Any = dataclasses.MISSING, *, ge=None, gt=None, le=None, lt=None,
+          choices=None, unit: str | None = None, doc: str = "", default_factory=dataclasses.MISSING):
+    """A dataclass field with validation metadata (range, choices, unit, doc)."""
+    meta = {"ge": ge, "gt": gt, "le": le, "lt": lt, "choices": choices, "unit": unit, "doc": doc}
+    if default_factory is not dataclasses.MISSING:
+        return dataclasses.field(default_factory=default_factory, metadata=meta)
+    return dataclasses.field(default=default, metadata=meta)
+
+
+def _range_text(meta: Mapping[str, Any]) -> str:
+    parts = []
+    if meta.get("gt") is not None:
+        parts.append(f"> {meta['gt']}")
+    if meta.get("ge") is not None:
+        parts.append(f">= {meta['ge']}")
+    if meta.get("lt") is not None:
+        parts.append(f"< {meta['lt']}")
+    if meta.get("le") is not None:
+        parts.append(f"<= {meta['le']}")
+    return " and ".join(parts)
+
+
+def _check_range(key: str, value: Any, meta: Mapping[str, Any]) -> None:
+    if meta.get("choices") is not None and value not in meta["choices"]:
+        raise ConfigError(f"{key}: must be one of {list(meta['choices'])} (got {value!r})")
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"{key}: must be a finite number (got {value!r})")
+        bad = ((meta.get("gt") is not None and not value > meta["gt"])
+               or (meta.get("ge") is not None and not value >= meta["ge"])
+               or (meta.get("lt") is not None and not value < meta["lt"])
+               or (meta.get("le") is not None and not value <= meta["le"]))
+        if bad:
+            raise ConfigError(f"{key}: must be {_range_text(meta)} (got {value!r})")
+
+
+def _type_name(tp: Any) -> str:
+    return getattr(tp, "__name__", str(tp))
+
+
+def _coerce(key: str, value: Any, tp: Any) -> Any:
+    """Check ``value`` against annotation ``tp``; return the (possibly converted) value."""
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        args = typing.get_args(tp)
+        if value is None and type(None) in args:
+            return None
+        errors = []
+        for arg in args:
+            if arg is type(None):
+                continue
+            try:
+                return _coerce(key, value, arg)
+            except ConfigError as exc:  # try the next alternative
+                errors.append(str(exc))
+        raise ConfigError(errors[0] if errors else f"{key}: invalid value {value!r}")
+    if origin is typing.Literal:
+        allowed = typing.get_args(tp)
+        if value not in allowed:
+            raise ConfigError(f"{key}: must be one of {list(allowed)} (got {value!r})")
+        return value
+    if origin in (list, tuple):
+        if not isinstance(value, (list, tuple)):
+            raise ConfigError(f"{key}: must be a list (got {type(value).__name__} {value!r})")
+        args = typing.get_args(tp)
+        item_tp = args[0] if args else Any
+        items = [_coerce(f"{key}[{i}]", v, item_tp) for i, v in enumerate(value)]
+        return tuple(items) if origin is tuple else items
+    if origin is dict:
+        if not isinstance(value, Mapping):
+            raise ConfigError(f"{key}: must be a mapping (got {type(value).__name__})")
+        return dict(value)
+    if dataclasses.is_dataclass(tp):
+        if isinstance(value, tp):
+            return value
+        if not isinstance(value, Mapping):
+            raise ConfigError(f"{key}: must be a mapping of {_type_name(tp)} fields (got {value!r})")
+        return build(tp, value, prefix=key)
+    if tp is Any:
+        return value
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(f"{key}: must be a number (got {type(value).__name__} {value!r})")
+        return float(value)
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            if isinstance(value, float) and value.is_integer():
+                return int(value)
+            raise ConfigError(f"{key}: must be an integer (got {type(value).__name__} {value!r})")
+        return value
+    if tp is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(f"{key}: must be true or false (got {value!r})")
+        return value
+    if tp is str:
+        if not isinstance(value, str):
+            raise ConfigError(f"{key}: must be a string (got {type(value).__name__} {value!r})")
+        return value
+    if isinstance(tp, type) and not isinstance(value, tp):
+        raise ConfigError(f"{key}: must be of type {_type_name(tp)} (got {value!r})")
+    return value
+
+
+def build(cls: type, data: Mapping[str, Any] | None, prefix: str = ""):
+    """Build dataclass ``cls`` from a mapping, validating keys, types and ranges."""
+    data = {} if data is None else data
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"{prefix or 'config'}: must be a mapping (got {data!r})")
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    unknown = sorted(set(data) - set(fields))
+    if unknown:
+        where = f"{prefix}." if prefix else ""
+        raise ConfigError(f"{where}{unknown[0]}: unknown key (allowed: {', '.join(sorted(fields))})")
+    kwargs = {}
+    for name, f in fields.items():
+        key = f"{prefix}.{name}" if prefix else name
+        if name in data:
+            value = _coerce(key, data[name], hints[name])
+        elif f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING:
+            continue
+        else:
+            raise ConfigError(f"{key}: required key is missing")
+        _check_range(key, value, f.metadata)
+        kwargs[name] = value
+    obj = cls(**kwargs)
+    # validate defaults too (cheap; catches inconsistent defaults early)
+    for name, f in fields.items():
+        if name not in kwargs:
+            _check_range(f"{prefix}.{name}" if prefix else name, getattr(obj, name), f.metadata)
+    validate = getattr(obj, "validate", None)
+    if callable(validate):
+        validate(prefix)
+    return obj
+
+
+def to_dict(obj: Any) -> Any:
+    """Dataclass -> plain dict (tuples become lists) suitable for YAML."""
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return {f.name: to_dict(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    if isinstance(obj, (list, tuple)):
+        return [to_dict(v) for v in obj]
+    if isinstance(obj, dict):
+        return {k: to_dict(v) for k, v in obj.items()}
+    return obj
+
+
+def to_yaml(obj: Any) -> str:
+    """The full resolved config as YAML text (stored in every output's ``config`` attribute)."""
+    return yaml.safe_dump(to_dict(obj), sort_keys=False)
+
+
+def load_yaml(path: str | Path) -> dict:
+    """Read a YAML mapping; a clear ConfigError if the file is missing or not a mapping."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"{path}: config file not found")
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path}: not valid YAML ({exc})") from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: top level must be a mapping of keys")
+    return data
+
+
+def merge(base: Mapping[str, Any], override: Mapping[str, Any]) -> dict:
+    """Recursive dict merge (override wins); used to overlay a user YAML on case defaults."""
+    out = dict(base)
+    for k, v in override.items():
+        if isinstance(v, Mapping) and isinstance(out.get(k), Mapping):
+            out[k] = merge(out[k], v)
+        else:
+            out[k] = v
+    return out
