@@ -27,6 +27,32 @@ def _cmd_cases(args) -> int:
     return 0
 
 
+def _cmd_warmup(args) -> int:
+    """Compile (and cache) every stage's numba kernels once, before parallel jobs start."""
+    import time
+    for stage in args.stages:
+        t0 = time.perf_counter()
+        importlib.import_module(f"granudep.{stage}.api").warmup()
+        LOG.info("warm-up %s: %.1f s", stage, time.perf_counter() - t0)
+    if args.touch:
+        from .io import write_text
+        write_text("numba kernels compiled\n", args.touch)
+    return 0
+
+
+def _cmd_verify(args) -> int:
+    """Run a stage's analytic verification suite and write the table (CSV) the report reads."""
+    from .io import write_text
+    module = importlib.import_module(f"granudep.{args.stage}.verification")
+    table = module.run_all(quick=args.quick)
+    print(table.to_string(index=False))
+    write_text(table.to_csv(index=False), args.output)
+    failed = int((~table["passed"].astype(bool)).sum())
+    if failed:
+        LOG.warning("%d verification check(s) outside tolerance: see %s", failed, args.output)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="granudep", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"granudep {__version__}")
@@ -34,6 +60,15 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     p = sub.add_parser("cases", help="list the paper's named cases (Tables 1 and 5)")
     p.set_defaults(func=_cmd_cases)
+    p = sub.add_parser("warmup", help="compile and cache the numba kernels (run once before parallel jobs)")
+    p.add_argument("stages", nargs="*", default=["da", "isph"], choices=["da", "isph"])
+    p.add_argument("--touch", metavar="FILE", help="write this flag file when done (Snakemake target)")
+    p.set_defaults(func=_cmd_warmup)
+    p = sub.add_parser("verify", help="run a stage's analytic verification suite and write a CSV table")
+    p.add_argument("stage", choices=["da", "isph"])
+    p.add_argument("-o", "--output", required=True, help="CSV: check, quantity, value, reference, error, tolerance, passed, note")
+    p.add_argument("--quick", action="store_true", help="coarser resolutions (CI smoke)")
+    p.set_defaults(func=_cmd_verify)
     for name in STAGES:
         try:
             module = importlib.import_module(name)
