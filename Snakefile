@@ -1,0 +1,51 @@
+# granudep: reproduction of Nikooei & Choi (2022), "Towards depth-averaged modelling of the decay
+# of granular flows by deposition", as one Snakemake workflow.
+#
+#   snakemake -j2                         full reproduction (paper resolution)
+#   snakemake -j2 --profile profiles/ci   coarse smoke run of the whole chain
+#   snakemake -j2 results/isph/T22-A70.nc one target, only what it needs
+#   snakemake -j2 convergence | sensitivity   extra studies (not part of `all`)
+#
+# Every rule is a thin call of the `granudep` command line; the physics lives in src/granudep.
+
+from snakemake.utils import min_version, validate
+
+min_version("9.0")
+
+
+configfile: "config/config.yaml"
+
+
+validate(config, "workflow/schemas/config.schema.yaml")
+
+
+wildcard_constraints:
+    case="[A-Za-z0-9_-]+",
+    variant="deposition|nodeposition",
+    dx="[0-9]+(\\.[0-9]+)?",
+    n="[0-9]+",
+    param="[a-z_]+",
+    value="-?[0-9]+(\\.[0-9]+)?",
+
+
+include: "workflow/rules/common.smk"
+
+
+rule all:
+    input:
+        ALL_TARGETS,
+    default_target: True
+
+
+# The method, in the paper's order:
+include: "workflow/rules/warmup.smk"  # compile numba kernels once (no cache races)
+include: "workflow/rules/isph.smk"  # 2D ISPH runs (Section 2.1-2.2, Table 1)
+include: "workflow/rules/monitor.smk"  # monitoring sections (Section 3, eqs 15-17, Appendix)
+include: "workflow/rules/regress.smk"  # critical DA momentum, A and B (Section 4.2, eq 36)
+include: "workflow/rules/da.smk"  # 1D DA SPH with/without deposition (Sections 2.3-2.4)
+include: "workflow/rules/compare.smk"  # DA against the 2D reference (Section 4.3, Figs 15-16)
+include: "workflow/rules/verify.smk"  # analytic verification suites
+include: "workflow/rules/figures.smk"  # one rule per paper figure
+include: "workflow/rules/summary.smk"  # results/summary.md and benchmark table
+include: "workflow/rules/convergence.smk"  # target `convergence` (not in `all`)
+include: "workflow/rules/sensitivity.smk"  # target `sensitivity` (not in `all`)

@@ -1,0 +1,96 @@
+# Shared helpers: case lists and target paths read from the validated config. No physics here.
+
+import os
+import sys
+
+# Run the `granudep` of the environment Snakemake itself runs in (also when Snakemake is called as
+# .venv/bin/snakemake without activating the environment).
+os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
+
+RESULTS = "results"
+LOGS = f"{RESULTS}/logs"
+BENCH = f"{RESULTS}/benchmarks"
+WARM = f"{RESULTS}/.numba_warm"
+
+USER_CASES = {c["name"]: c for c in config.get("user_cases", [])}
+
+# 2D ISPH runs: every Table 1 case, the Table 5 geometries at 22 deg, and the user's cases.
+PAPER_ISPH_CASES = list(dict.fromkeys(config["isph"]["cases"] + config["isph"]["table5_geometries"]))
+ISPH_CASES = list(dict.fromkeys(PAPER_ISPH_CASES + list(USER_CASES)))
+# The regression (A, B tables) uses the paper's 2D runs only.
+REGRESS_CASES = PAPER_ISPH_CASES
+DA_CASES = list(config["da"]["cases"])
+DA_VARIANTS = list(config["da"]["variants"])
+# Table 5 geometries whose 2D runs are the DA reference (only those of the DA cases that run).
+REFERENCE_2D = {c: config["da"]["reference_2d"][c] for c in DA_CASES}
+WM_CASES = [c for c in config["monitor"]["wm_cases"] if c in ISPH_CASES]
+
+
+def isph_dx(case):
+    """Initial particle spacing of one 2D run (per-case override, else the global dx)."""
+    return config["isph"]["dx_per_case"].get(case, config["isph"]["dx"])
+
+
+def isph_source(case):
+    """What `granudep isph` is given: a paper case name, or the generated YAML of a user case."""
+    return f"{RESULTS}/user_cases/{case}.yaml" if case in USER_CASES else case
+
+
+def da_source(case):
+    return f"{RESULTS}/user_cases/{case}.yaml" if case in USER_CASES else case
+
+
+def fig_cases(name):
+    """Cases a figure shows: the configured list, restricted to the 2D runs this config makes."""
+    return [c for c in config["figures"].get(name, []) if c in ISPH_CASES]
+
+
+# Paper figure -> output file (names after the paper's figure numbers).
+FIGURES = {
+    "fig5": "fig5_free_surface.png",
+    "fig7": "fig7_fd_interface.png",
+    "fig8": "fig8_total_depth.png",
+    "fig9": "fig9_deposit_depth.png",
+    "fig10": "fig10_velocity_profiles.png",
+    "fig11": "fig11_momentum.png",
+    "fig12": "fig12_critical_momentum.png",
+    "fig13": "fig13_coefficients.png",
+    "fig15": "fig15_runout_time.png",
+    "fig16": "fig16_runout_flowtime.png",
+    "fig17": "fig17_depth_profiles.png",
+    "figA1": "figA1_wm_momentum.png",
+    "figA2": "figA2_wm_rms.png",
+}
+
+
+def figure_path(name):
+    return f"{RESULTS}/figures/{FIGURES[name]}"
+
+
+# figures drawn only when their inputs exist in this configuration
+ACTIVE_FIGURES = [
+    name
+    for name in FIGURES
+    if not (name in ("figA1", "figA2") and not WM_CASES)
+    and not (name in ("fig5", "fig7", "fig8", "fig9", "fig10", "fig11") and not fig_cases(name))
+]
+
+REGRESSION_OUTPUTS = [
+    f"{RESULTS}/regression/critical.csv",
+    f"{RESULTS}/regression/coefficients.csv",
+    f"{RESULTS}/regression/coefficients.nc",
+    f"{RESULTS}/regression/table3_comparison.csv",
+    f"{RESULTS}/regression/table5_comparison.csv",
+]
+
+ALL_TARGETS = (
+    [f"{RESULTS}/isph/{c}.nc" for c in ISPH_CASES]
+    + [f"{RESULTS}/sections/{c}.nc" for c in ISPH_CASES]
+    + [f"{RESULTS}/wm/{c}.nc" for c in WM_CASES]
+    + REGRESSION_OUTPUTS
+    + [f"{RESULTS}/da/{c}_{v}.nc" for c in DA_CASES + list(USER_CASES) for v in DA_VARIANTS]
+    + [f"{RESULTS}/compare/reference_2d.csv", f"{RESULTS}/compare/comparison.csv"]
+    + [f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"]
+    + [figure_path(n) for n in ACTIVE_FIGURES]
+    + [f"{RESULTS}/summary.md", f"{RESULTS}/benchmarks/summary.csv"]
+)

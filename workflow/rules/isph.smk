@@ -1,0 +1,47 @@
+# 2D ISPH with the mu(I) rheology (Sections 2.1-2.2): every Table 1 case, the Table 5 geometries
+# at 22 deg, and any user case. Output: results/isph/{case}.nc (particles x time).
+
+
+rule user_case_config:
+    """A user case from config `user_cases` as the YAML file the granudep CLIs read."""
+    output:
+        f"{RESULTS}/user_cases/{{case}}.yaml",
+    params:
+        entry=lambda wc: USER_CASES[wc.case],
+    log:
+        f"{LOGS}/user_cases/{{case}}.log",
+    run:
+        import yaml
+
+        e = params.entry
+        text = yaml.safe_dump(
+            {"case": e["name"], "geometry": {"theta_deg": e["theta_deg"], "L0": e["L0"], "H0": e["H0"]}},
+            sort_keys=False,
+        )
+        with open(output[0], "w") as fh:
+            fh.write(text)
+        with open(log[0], "w") as fh:
+            fh.write(f"wrote {output[0]}\n")
+
+
+rule isph_run:
+    input:
+        warm=WARM,
+        source=lambda wc: [isph_source(wc.case)] if wc.case in USER_CASES else [],
+    output:
+        f"{RESULTS}/isph/{{case}}.nc",
+    params:
+        source=lambda wc: isph_source(wc.case),
+        dx=lambda wc: isph_dx(wc.case),
+        t_end=lambda wc: f"--t-end {config['isph']['t_end']}" if config["isph"].get("t_end") else "",
+    log:
+        f"{LOGS}/isph/{{case}}.log",
+    benchmark:
+        f"{BENCH}/isph/{{case}}.tsv"
+    threads: config["isph"]["threads"]
+    resources:
+        runtime=240,
+        mem_mb=4000,
+    shell:
+        "NUMBA_NUM_THREADS={threads} granudep isph {params.source} --dx {params.dx} {params.t_end}"
+        " -o {output} > {log} 2>&1"

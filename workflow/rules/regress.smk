@@ -1,0 +1,25 @@
+# Critical DA momentum (Section 4.2): onset of deposition per section, (hu)_C/p0 = A[x] + B per
+# case (eq 36), the A/B tables over (a, theta) and the paper-vs-ours Tables 3 and 5.
+
+
+rule regress:
+    input:
+        sections=expand(f"{RESULTS}/sections/{{case}}.nc", case=REGRESS_CASES),
+    output:
+        critical=f"{RESULTS}/regression/critical.csv",
+        coefficients=f"{RESULTS}/regression/coefficients.csv",
+        coefficients_nc=f"{RESULTS}/regression/coefficients.nc",
+        table3=f"{RESULTS}/regression/table3_comparison.csv",
+        table5=f"{RESULTS}/regression/table5_comparison.csv",
+    params:
+        outdir=f"{RESULTS}/regression",
+    log:
+        f"{LOGS}/regress.log",
+    benchmark:
+        f"{BENCH}/regress.tsv"
+    threads: 1
+    resources:
+        runtime=15,
+        mem_mb=2000,
+    shell:
+        "granudep regress {input.sections} -o {params.outdir} > {log} 2>&1"

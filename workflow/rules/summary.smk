@@ -1,0 +1,45 @@
+# results/summary.md: the paper-vs-ours tables (Table 3, Table 5 A/B, Fig 16 errors) and the
+# verification results, all read from the outputs; then the per-rule benchmark table.
+
+
+rule summary:
+    input:
+        regression=REGRESSION_OUTPUTS,
+        compare=f"{RESULTS}/compare/comparison.csv",
+        verification=[f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"],
+        figures=[figure_path(n) for n in ACTIVE_FIGURES],
+    output:
+        report(f"{RESULTS}/summary.md", category="Summary"),
+    params:
+        regression=f"{RESULTS}/regression",
+        benchmarks=BENCH,
+    log:
+        f"{LOGS}/summary.log",
+    benchmark:
+        f"{BENCH}/summary.tsv"
+    threads: 1
+    resources:
+        runtime=10,
+        mem_mb=2000,
+    shell:
+        "granudep summary -o {output} --regression {params.regression} --compare {input.compare}"
+        " --verification {input.verification} --benchmarks {params.benchmarks} > {log} 2>&1"
+
+
+rule benchmarks_summary:
+    """Wall time and peak memory of every rule's benchmark file (Performance: <= 15 min target)."""
+    input:
+        [t for t in ALL_TARGETS if t != f"{BENCH}/summary.csv"],
+    output:
+        f"{BENCH}/summary.csv",
+    params:
+        bench=BENCH,
+        python=sys.executable,
+    log:
+        f"{LOGS}/benchmarks_summary.log",
+    threads: 1
+    resources:
+        runtime=5,
+        mem_mb=1000,
+    shell:
+        "{params.python} benchmarks/workflow_summary.py {params.bench} -o {output} > {log} 2>&1"
