@@ -3,6 +3,8 @@
 import os
 import sys
 
+from snakemake.exceptions import WorkflowError
+
 # Run the `granudep` of the environment Snakemake itself runs in (also when Snakemake is called as
 # .venv/bin/snakemake without activating the environment).
 os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
@@ -22,6 +24,12 @@ REGRESS_CASES = PAPER_ISPH_CASES
 DA_CASES = list(config["da"]["cases"])
 DA_VARIANTS = list(config["da"]["variants"])
 # Table 5 geometries whose 2D runs are the DA reference (only those of the DA cases that run).
+_missing = [c for c in DA_CASES if c not in config["da"]["reference_2d"]]
+if _missing:
+    raise WorkflowError(
+        f"config da.reference_2d: no 2D reference run for {', '.join(_missing)} "
+        "(map each DA case to the ISPH case of the same geometry, e.g. 1D-A70: T22-A70)"
+    )
 REFERENCE_2D = {c: config["da"]["reference_2d"][c] for c in DA_CASES}
 WM_CASES = [c for c in config["monitor"]["wm_cases"] if c in ISPH_CASES]
 

@@ -1,0 +1,148 @@
+"""The Snakemake workflow schedules what the paper's method needs (dry runs, no computation).
+
+Each test copies the workflow (Snakefile, workflow/, config/, profiles/, benchmarks/) into a fresh
+folder, so existing results or a running workflow in the checkout cannot change the job counts.
+"""
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[2]
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+
+TABLE1 = ["T10-A35", "T16-A35", "T22-A35", "T16-A50", "T22-A50", "T10-A70", "T22-A70", "T10-A100",
+          "T16-A100", "T22-A100", "T10-A120", "T16-A120", "T22-A120", "T22-A150"]
+TABLE5_GEOMETRIES = ["T22-A30", "T22-A45", "T22-A124"]
+FIGURES = ["fig5", "fig7", "fig8", "fig9", "fig10", "fig11", "fig12", "fig13", "fig15", "fig16",
+           "fig17", "figA1", "figA2"]
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory) -> Path:
+    d = tmp_path_factory.mktemp("wf")
+    shutil.copy(ROOT / "Snakefile", d / "Snakefile")
+    for sub in ("workflow", "config", "profiles", "benchmarks"):
+        shutil.copytree(ROOT / sub, d / sub)
+    return d
+
+
+def dry_run(workdir: Path, *args: str) -> tuple[int, str, dict[str, int]]:
+    """`snakemake -n` in workdir; returns exit code, output and the job-count table."""
+    proc = subprocess.run(SNAKEMAKE + ["-n", "-p", "--nolock", *args], cwd=workdir,
+                          capture_output=True, text=True, timeout=120)
+    out = proc.stdout + proc.stderr
+    counts = {}
+    if "Job stats:" in out:
+        table = out.split("Job stats:", 1)[1]
+        for line in table.splitlines()[3:]:
+            m = re.match(r"^(\S+)\s+(\d+)$", line.strip())
+            if not m:
+                break
+            counts[m.group(1)] = int(m.group(2))
+    return proc.returncode, out, counts
+
+
+def test_default_config_schedules_the_whole_paper(workdir):
+    rc, out, jobs = dry_run(workdir, "-j2")
+    assert rc == 0, out
+    n2d = len(TABLE1) + len(TABLE5_GEOMETRIES)
+    assert jobs["isph_run"] == n2d
+    assert jobs["monitor"] == n2d
+    assert jobs["monitor_wm"] == 6  # Table 1 cases at 22 deg (Appendix)
+    assert jobs["da_run"] == 8  # 4 Table 5 cases x (deposition, nodeposition)
+    for rule in ("warmup", "regress", "reference", "compare", "verify_da", "verify_isph", "summary",
+                 "benchmarks_summary", "all"):
+        assert jobs[rule] == 1, rule
+    assert {f"figure_{f}" for f in FIGURES} <= set(jobs)
+    # the extra studies are separate targets
+    assert not any(r.startswith(("convergence", "sensitivity")) for r in jobs)
+    # paper resolution and the Table 5 A, B by default; every 2D run gets its dx
+    assert out.count("--dx 0.004") == n2d
+    assert "--ab-source paper" in out and "--ab-source computed" not in out
+    # every numba rule sets its own thread count
+    assert re.search(r"NUMBA_NUM_THREADS=1 granudep isph T22-A70 ", out)
+
+
+def test_ci_profile_runs_the_whole_chain_small(workdir):
+    rc, out, jobs = dry_run(workdir, "--profile", "profiles/ci")
+    assert rc == 0, out
+    assert jobs["isph_run"] == 2 and jobs["monitor"] == 2 and jobs["da_run"] == 2
+    assert jobs["regress"] == jobs["reference"] == jobs["compare"] == jobs["summary"] == 1
+    assert {f"figure_{f}" for f in FIGURES} <= set(jobs)
+    assert "granudep isph T22-A70 --dx 0.01" in out and "granudep isph T16-A50 --dx 0.01" in out
+    # the DA run with deposition uses the A, B our regression computed
+    assert "--ab-source computed --coefficients results/regression/coefficients.csv" in out
+    assert "granudep verify isph --quick" in out
+
+
+@pytest.mark.parametrize("target, expected", [
+    ("results/isph/T22-A70.nc", {"warmup": 1, "isph_run": 1}),
+    ("results/sections/T16-A50.nc", {"warmup": 1, "isph_run": 1, "monitor": 1}),
+    ("results/da/1D-A70_nodeposition.nc", {"warmup": 1, "da_run": 1}),
+])
+def test_single_targets_run_only_what_they_need(workdir, target, expected):
+    rc, out, jobs = dry_run(workdir, "-j2", target)
+    assert rc == 0, out
+    assert jobs.pop("total") == sum(expected.values())
+    assert jobs == expected
+
+
+def test_slurm_profile_dry_runs(workdir):
+    pytest.importorskip("snakemake_executor_plugin_slurm")
+    rc, out, jobs = dry_run(workdir, "--profile", "profiles/slurm")
+    assert rc == 0, out
+    assert jobs["isph_run"] == len(TABLE1) + len(TABLE5_GEOMETRIES)
+
+
+@pytest.mark.parametrize("target, rule, count", [
+    ("convergence", "convergence_isph", 3),
+    ("sensitivity", "sensitivity", 1),
+])
+def test_extra_study_targets_dry_run(workdir, target, rule, count):
+    rc, out, jobs = dry_run(workdir, "-j2", target)
+    assert rc == 0, out
+    assert jobs[rule] == count
+
+
+def test_user_case_gets_2d_and_da_runs(workdir, tmp_path):
+    overlay = tmp_path / "user.yaml"
+    overlay.write_text(yaml.safe_dump({"user_cases": [
+        {"name": "my-column", "theta_deg": 20, "L0": 0.2, "H0": 0.12}]}))
+    rc, out, jobs = dry_run(workdir, "-j2", "--configfile", str(overlay))
+    assert rc == 0, out
+    assert jobs["isph_run"] == len(TABLE1) + len(TABLE5_GEOMETRIES) + 1
+    assert jobs["user_case_config"] == 1
+    assert "granudep isph results/user_cases/my-column.yaml" in out
+    assert re.search(r"granudep da results/user_cases/my-column.yaml --ab-source computed", out)
+
+
+@pytest.mark.parametrize("overlay, key", [
+    ({"isph": {"dx": -0.004}}, "['isph']['dx']"),
+    ({"isph": {"cases": ["T22-A70", "bad case"]}}, "['isph']['cases'][1]"),
+    ({"da": {"cases": ["1D-A70", "T22-A70"]}}, "['da']['cases'][1]"),
+    ({"da": {"ab_source": "guess"}}, "['da']['ab_source']"),
+    ({"user_cases": [{"name": "x", "theta_deg": 20, "L0": 0.2, "H0": 0}]}, "['user_cases'][0]['H0']"),
+    ({"isph": {"dxx": 0.004}}, "dxx"),
+])
+def test_schema_rejects_bad_config_naming_the_key(workdir, tmp_path, overlay, key):
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(overlay))
+    rc, out, jobs = dry_run(workdir, "-j2", "--configfile", str(path))
+    assert rc != 0
+    assert "Failed validating" in out or "validation" in out.lower(), out
+    assert key in out, out
+    assert not jobs  # nothing scheduled
+
+
+def test_da_case_without_2d_reference_is_refused(workdir, tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump({"da": {"cases": ["1D-A70", "1D-A99"]}}))
+    rc, out, jobs = dry_run(workdir, "-j2", "--configfile", str(path))
+    assert rc != 0 and "da.reference_2d" in out and "1D-A99" in out, out
