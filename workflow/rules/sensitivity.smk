@@ -1,4 +1,162 @@
-# placeholder, filled in below
-rule sensitivity:
+# Sensitivity study (beyond the paper; issue 5): one parameter at a time away from its paper value
+# -> its effect on A, B (eq 36) and on the DA runout. Target `sensitivity`, not in `all`.
+#   phi_internal_deg, phi_basal_deg: rerun the 2D case (coarser dx) and the DA case with the angle
+#   critical_speed, divergence_threshold: re-monitor the baseline 2D run (eq 16 threshold, 0.1 m/s)
+# Each run is named {sens} = "baseline" or "{parameter}_{value}".
+
+SENS = config["sensitivity"]
+SENS_DIR = f"{RESULTS}/sensitivity"
+SENS_PARAMS = ("phi_internal_deg", "phi_basal_deg", "critical_speed", "divergence_threshold")
+SENS_RUNS = ["baseline"] + [f"{p}_{v}" for p in SENS_PARAMS for v in SENS.get(p, [])]
+# which config key of each stage a sensitivity parameter sets (plumbing only; defaults in the code)
+SENS_ISPH_KEYS = {"phi_internal_deg": ("material", "phi_deg"), "phi_basal_deg": ("wall", "phi_wall_deg")}
+SENS_DA_KEYS = {"phi_internal_deg": ("material", "phi_internal_deg"), "phi_basal_deg": ("material", "phi_basal_deg")}
+SENS_MONITOR_OPTIONS = {"critical_speed": "--critical-speed", "divergence_threshold": "--interface-threshold"}
+
+
+def sens_split(sens):
+    """'phi_basal_deg_23.5' -> ('phi_basal_deg', 23.5); 'baseline' -> (None, None)."""
+    if sens == "baseline":
+        return None, None
+    param, value = sens.rsplit("_", 1)
+    return param, float(value)
+
+
+def sens_isph_run(sens):
+    """The 2D run a sensitivity run monitors: its own rerun for the friction angles, else the baseline."""
+    param, _ = sens_split(sens)
+    return sens if param in SENS_ISPH_KEYS else "baseline"
+
+
+def sens_override(keys, sens, case):
+    param, value = sens_split(sens)
+    data = {"case": case}
+    if param in keys:
+        section, key = keys[param]
+        data[section] = {key: value}
+    return data
+
+
+wildcard_constraints:
+    sens="baseline|[a-z_]+_-?[0-9]+(\\.[0-9]+)?",
+
+
+rule sensitivity_config:
+    """Config YAML (case + the one changed key) for the 2D (isph) or DA (da) run of {sens}."""
+    output:
+        f"{SENS_DIR}/config/{{stage}}_{{sens}}.yaml",
+    wildcard_constraints:
+        stage="isph|da",
+    params:
+        data=lambda wc: sens_override(SENS_ISPH_KEYS, wc.sens, SENS["isph_case"])
+        if wc.stage == "isph"
+        else sens_override(SENS_DA_KEYS, wc.sens, SENS["da_case"]),
+    log:
+        f"{LOGS}/sensitivity/config/{{stage}}_{{sens}}.log",
+    run:
+        import yaml
+
+        with open(output[0], "w") as fh:
+            fh.write(yaml.safe_dump(params.data, sort_keys=False))
+        with open(log[0], "w") as fh:
+            fh.write(f"wrote {output[0]}\n")
+
+
+rule sensitivity_isph:
     input:
-        [],
+        warm=WARM,
+        config=f"{SENS_DIR}/config/isph_{{sens}}.yaml",
+    output:
+        f"{SENS_DIR}/isph/{{sens}}.nc",
+    params:
+        dx=SENS["dx"],
+    log:
+        f"{LOGS}/sensitivity/isph/{{sens}}.log",
+    benchmark:
+        f"{BENCH}/sensitivity/isph/{{sens}}.tsv"
+    threads: config["isph"]["threads"]
+    resources:
+        runtime=240,
+        mem_mb=4000,
+    shell:
+        "NUMBA_NUM_THREADS={threads} granudep isph {input.config} --dx {params.dx} -o {output} > {log} 2>&1"
+
+
+rule sensitivity_monitor:
+    input:
+        warm=WARM,
+        run=lambda wc: f"{SENS_DIR}/isph/{sens_isph_run(wc.sens)}.nc",
+    output:
+        f"{SENS_DIR}/sections/{{sens}}.nc",
+    params:
+        width_factor=config["monitor"]["width_factor"],
+        options=lambda wc: (
+            f"{SENS_MONITOR_OPTIONS[sens_split(wc.sens)[0]]} {sens_split(wc.sens)[1]}"
+            if sens_split(wc.sens)[0] in SENS_MONITOR_OPTIONS
+            else ""
+        ),
+    log:
+        f"{LOGS}/sensitivity/sections/{{sens}}.log",
+    benchmark:
+        f"{BENCH}/sensitivity/sections/{{sens}}.tsv"
+    threads: 1
+    shell:
+        "NUMBA_NUM_THREADS={threads} granudep monitor {input.run} --width-factor {params.width_factor}"
+        " {params.options} -o {output} > {log} 2>&1"
+
+
+rule sensitivity_regress:
+    input:
+        f"{SENS_DIR}/sections/{{sens}}.nc",
+    output:
+        critical=f"{SENS_DIR}/regression/{{sens}}/critical.csv",
+        coefficients=f"{SENS_DIR}/regression/{{sens}}/coefficients.csv",
+    params:
+        outdir=f"{SENS_DIR}/regression/{{sens}}",
+    log:
+        f"{LOGS}/sensitivity/regression/{{sens}}.log",
+    benchmark:
+        f"{BENCH}/sensitivity/regression/{{sens}}.tsv"
+    threads: 1
+    shell:
+        "granudep regress {input} -o {params.outdir} > {log} 2>&1"
+
+
+rule sensitivity_da:
+    input:
+        warm=WARM,
+        config=f"{SENS_DIR}/config/da_{{sens}}.yaml",
+        coefficients=f"{SENS_DIR}/regression/{{sens}}/coefficients.csv",
+    output:
+        f"{SENS_DIR}/da/{{sens}}.nc",
+    params:
+        n_particles=config["da"]["n_particles"],
+    log:
+        f"{LOGS}/sensitivity/da/{{sens}}.log",
+    benchmark:
+        f"{BENCH}/sensitivity/da/{{sens}}.tsv"
+    threads: 1
+    shell:
+        "NUMBA_NUM_THREADS={threads} granudep da {input.config} --ab-source computed"
+        " --coefficients {input.coefficients} --n-particles {params.n_particles} -o {output} > {log} 2>&1"
+
+
+rule figure_sensitivity:
+    input:
+        coefficients=expand(f"{SENS_DIR}/regression/{{sens}}/coefficients.csv", sens=SENS_RUNS),
+        da=expand(f"{SENS_DIR}/da/{{sens}}.nc", sens=SENS_RUNS),
+    output:
+        report(f"{RESULTS}/figures/sensitivity.png", caption="../report/sensitivity.rst", category="Sensitivity"),
+    log:
+        f"{LOGS}/figures/sensitivity.log",
+    benchmark:
+        f"{BENCH}/figures/sensitivity.tsv"
+    threads: 1
+    shell:
+        "MPLBACKEND=Agg granudep figure sensitivity -o {output} {input} > {log} 2>&1"
+
+
+rule sensitivity:
+    """Target: every sensitivity run and its figure."""
+    input:
+        f"{RESULTS}/figures/sensitivity.png",
