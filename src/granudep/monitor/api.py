@@ -217,3 +217,12 @@ def monitor_wm(run, **overrides) -> xr.Dataset:
     ds.attrs["wm_reference"] = cfg.wm_reference
     provenance(ds, case=_case(run), config_yaml=to_yaml(cfg))
     return ds
+
+
+def warmup() -> None:
+    """Compile (and cache) the monitor kernels once, before parallel jobs start."""
+    x = np.array([0.0, 0.001, 0.0]) + 0.0005
+    y = np.array([0.0005, 0.0005, 0.0015])
+    dep = np.array([True, True, False])
+    divr_deposited(x, y, dep, 1e-6, 0.0013, True)
+    section_reduce(x, y, np.zeros(3), dep, dep, 0.0, 0.001, 0.001, 2)

@@ -27,7 +27,7 @@ from .config import RegressConfig
 def linear_fit(x, y):
     """Least-squares y = slope·x + intercept over finite pairs: (slope, intercept, R², n).
 
-    R² = 1 − SS_res/SS_tot (NaN when fewer than 2 points or y is constant)."""
+    R² = 1 − SS_res/SS_tot (NaN when fewer than 2 points or y is constant up to round-off)."""
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     ok = np.isfinite(x) & np.isfinite(y)
@@ -38,7 +38,8 @@ def linear_fit(x, y):
     slope, intercept = np.polyfit(x, y, 1)
     ss_tot = float(np.sum((y - y.mean()) ** 2))
     ss_res = float(np.sum((y - (slope * x + intercept)) ** 2))
-    r2 = 1.0 - ss_res / ss_tot if ss_tot > 0 else math.nan
+    tiny = n * (1e-12 * float(np.max(np.abs(y)))) ** 2  # constant y up to round-off: R² undefined
+    r2 = 1.0 - ss_res / ss_tot if ss_tot > tiny else math.nan
     return float(slope), float(intercept), r2, n
 
 

@@ -1,0 +1,69 @@
+"""``granudep monitor`` and ``granudep monitor-wm``: section time series of a 2D ISPH run."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..io import write_netcdf
+from ..progress import LOG
+
+
+def _common(p) -> None:
+    p.add_argument("run", help="2D ISPH run file (results/isph/{case}.nc)")
+    p.add_argument("--critical-speed", type=float, default=None, metavar="V",
+                   help="|v| below which a particle is deposited, m/s (default 0.1)")
+    p.add_argument("--interface-threshold", type=float, default=None, metavar="T",
+                   help="eq 16 threshold on div r over deposited neighbours (default 1.6)")
+    p.add_argument("--x-inf", type=float, default=None, metavar="X",
+                   help="final runout x_inf in m from the back wall (default: the run's final_front_position)")
+    p.add_argument("--n-sections", type=int, default=None, metavar="N", help="number of sections (default 11)")
+
+
+def _overrides(args) -> dict:
+    return {"critical_speed": args.critical_speed, "interface_threshold": args.interface_threshold,
+            "x_inf": args.x_inf, "n_sections": args.n_sections}
+
+
+def _cmd_monitor(args) -> int:
+    from .api import monitor
+    ds = monitor(args.run, width_factor=args.width_factor, **_overrides(args))
+    out = Path(args.output or f"results/sections/{ds.attrs['case']}.nc")
+    write_netcdf(ds, out)
+    src = ds.interface_source.values
+    LOG.info("monitor %s: %d sections x %d times, W_M = %g dx, x_inf = %.4f m; interface from eq 16 in %d, "
+             "fallback in %d, empty %d section-times -> %s", ds.attrs["case"], ds.sizes["section"],
+             ds.sizes["time"], ds.attrs["width_factor"], ds.attrs["x_inf"], (src == 1).sum(), (src == 2).sum(),
+             (src == -1).sum(), out)
+    return 0
+
+
+def _cmd_monitor_wm(args) -> int:
+    from .api import monitor_wm
+    over = _overrides(args)
+    if args.widths:
+        over["wm_factors"] = args.widths
+    ds = monitor_wm(args.run, **over)
+    out = Path(args.output or f"results/wm/{ds.attrs['case']}.nc")
+    write_netcdf(ds, out)
+    table = ds.rms_deviation.to_pandas()
+    table.columns = [f"{v:.2f}" for v in ds.x_norm.values]
+    table.index = [f"W_M={w:g}dx" for w in ds.width_factor.values]
+    print(f"RMS deviation of hu/p0 from W_M = {ds.attrs['wm_reference']:g} dx over the deceleration window "
+          f"(columns: [x]) -- {ds.attrs['case']}")
+    print(table.to_string(float_format=lambda v: f"{v:.4f}"))
+    LOG.info("monitor-wm %s -> %s", ds.attrs["case"], out)
+    return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser("monitor", help="monitoring-section time series of a 2D run (eqs 15-17)")
+    _common(p)
+    p.add_argument("-o", "--output", help="sections NetCDF (default results/sections/{case}.nc)")
+    p.add_argument("--width-factor", type=float, default=None, metavar="W",
+                   help="section width W_M in units of dx (default 2)")
+    p.set_defaults(func=_cmd_monitor)
+    p = sub.add_parser("monitor-wm", help="Appendix: hu/p0 for W_M = 1..4 dx and RMS deviation vs 2 dx (Figs A1-A2)")
+    _common(p)
+    p.add_argument("-o", "--output", help="NetCDF (default results/wm/{case}.nc)")
+    p.add_argument("--widths", type=float, nargs="+", default=None, metavar="W",
+                   help="section widths in units of dx (default 1 2 3 4; must include 2)")
+    p.set_defaults(func=_cmd_monitor_wm)
