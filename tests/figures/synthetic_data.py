@@ -132,15 +132,18 @@ def sections(case="T22-A70", L0=0.2, H0=0.14, theta=22.0, x_inf=0.5, dx=0.004, t
 
 
 def wm_sections(case="T22-A70", factors=(1, 2, 3, 4)):
-    """monitor-wm-like output: a width_factor dimension in front of (section, time)."""
+    """monitor-wm-like output: momentum_norm (width_factor, section, time), planted deviations
+    hu/p0·(1 + 0.01 (f − 2)) so the RMS from W_M = 2 dx is known; deceleration window; no rms
+    variable (the figure computes it)."""
     base = sections(case)
-    parts = []
-    for k, f in enumerate(factors):
-        d = base.copy(deep=True)
-        d["momentum"] = d["momentum"] * (1 + 0.01 * (f - 2))
-        parts.append(d)
-    ds = xr.concat(parts, dim="width_factor")
+    p0 = cases.momentum_scale(0.14, math.radians(22.0))
+    m = base["momentum"].values / p0
+    mom = np.stack([m * (1 + 0.01 * (f - 2)) for f in factors])
+    ds = base.drop_vars(list(base.data_vars))
     ds = ds.assign_coords(width_factor=var(np.asarray(factors, float), ("width_factor",), "1", "W_M / dx"))
+    ds["momentum_norm"] = var(mom, ("width_factor", "section", "time"), "1", "hu/p0 per width")
+    ds["deceleration"] = var((m > 0).astype(np.int8), ("section", "time"), "1", "deceleration window")
+    ds.attrs["wm_reference"] = 2.0
     return ds
 
 

@@ -64,7 +64,7 @@ def test_fig17_two_times(files):
 
 
 @pytest.mark.parametrize("name,extra", [
-    ("fig15", lambda f: [*f["da"], "--reference-runs", *f["isph"], "--reference", f["ref"]]),
+    ("fig15", lambda f: [*f["da"], *f["isph"], f["ref"]]),
     ("fig16", lambda f: [f["cmp"]]),
     ("fig17", lambda f: [f["da"][0], f["da"][2]]),
 ])

@@ -148,3 +148,52 @@ def nearest_row(df: pd.DataFrame, x_norm: float, tol: float = 1e-3):
     d = np.abs(df["x_norm"].to_numpy(float) - x_norm)
     i = int(np.argmin(d))
     return df.iloc[i] if d[i] <= tol else None
+
+
+# ---- input classification: the workflow passes every input positionally ----------------------------
+
+def kind_of(path) -> str:
+    """What a contract file is: isph, da, sections, wm (NetCDF); critical, coefficients, compare,
+    reference, sensitivity (CSV). Decided from the content (dims, columns), not the name."""
+    p = Path(path)
+    if not p.exists():
+        raise ConfigError(f"input: file {str(p)!r} does not exist")
+    if p.suffix.lower() == ".csv":
+        cols = set(pd.read_csv(p, nrows=0).columns)
+        if {"t_s_critical", "x_norm"} <= cols:
+            return "critical"
+        if {"A", "B"} <= cols:
+            return "coefficients"
+        if "runout_rel_error" in cols:
+            return "compare"
+        if {"parameter", "value"} <= cols:
+            return "sensitivity"
+        if {"final_runout_norm", "provenance"} <= cols:
+            return "reference"
+        return "csv"
+    with xr.open_dataset(p) as ds:
+        dims = set(ds.dims)
+        if "width_factor" in dims:
+            return "wm"
+        if "section" in dims:
+            return "sections"
+        if "x_grid" in dims:
+            return "da"
+        if "particle" in dims and "y" in ds.variables:
+            return "isph"
+    return "unknown"
+
+
+def classify(paths, allowed: tuple[str, ...], what: str) -> dict[str, list[str]]:
+    """Group input paths by :func:`kind_of`; refuse kinds the figure cannot use."""
+    out: dict[str, list[str]] = {k: [] for k in allowed}
+    for p in paths:
+        k = kind_of(p)
+        if k not in allowed:
+            raise ConfigError(f"{what}: input {str(p)!r} is a {k!r} file; this figure reads {', '.join(allowed)}")
+        out[k].append(str(p))
+    return out
+
+
+def add_inputs(p, help_text: str) -> None:
+    p.add_argument("inputs", nargs="+", metavar="INPUT", help=help_text + " (kind detected from the content)")

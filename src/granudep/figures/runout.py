@@ -15,8 +15,9 @@ import pandas as pd
 
 from .. import cases
 from ..compare import load_reference, match_table5
-from .common import (case_of, front_note, hide_unused, load, load_table, need, new_figure, note, panel_label,
-                     register)
+from ..config import ConfigError
+from .common import (add_inputs, case_of, classify, front_note, hide_unused, load, load_table, need, new_figure,
+                     note, panel_label, register)
 
 NO_FARIN = "Farin et al. (2014) measurements are not available to us: not shown"
 DA_STYLE = {1: dict(color="C0", ls="-", label="DA, with deposition"),
@@ -195,31 +196,35 @@ def fig17(da_runs, times=None):
 # ---- CLI -------------------------------------------------------------------------------------------
 
 def _args15(p):
-    p.add_argument("runs", nargs="+", metavar="DA.nc", help="DA runs (with and without deposition)")
-    p.add_argument("--reference-runs", nargs="*", default=[], metavar="ISPH.nc", help="2D reference runs")
-    p.add_argument("--reference", nargs="*", default=[], metavar="REF.csv", help="reference tables (final values)")
-    p.add_argument("--flow-time-tol", type=float, default=1e-3, metavar="M")
+    add_inputs(p, "DA runs (with/without deposition), 2D ISPH reference runs, reference tables (CSV)")
+    p.add_argument("--flow-time-tol", type=float, default=1e-3, metavar="M",
+                   help="2D flow time: front moves less than this afterwards (m)")
 
 
 @register("fig15", "runout ΔL/L0 vs time: 2D reference, DA with/without deposition (flow times marked)", _args15)
 def _fig15(args):
-    return fig15(args.runs, args.reference_runs, args.reference, args.flow_time_tol)
+    k = classify(args.inputs, ("da", "isph", "reference"), "fig15")
+    return fig15(k["da"], k["isph"], k["reference"], args.flow_time_tol)
 
 
 def _args16(p):
-    p.add_argument("compare", metavar="COMPARE.csv", help="output of granudep compare")
+    add_inputs(p, "the output of granudep compare (CSV)")
 
 
 @register("fig16", "final runout and flow time bars with relative errors vs each reference", _args16)
 def _fig16(args):
-    return fig16(args.compare)
+    k = classify(args.inputs, ("compare",), "fig16")
+    if len(k["compare"]) != 1:
+        raise ConfigError("fig16: give exactly one compare CSV")
+    return fig16(k["compare"][0])
 
 
 def _args17(p):
-    p.add_argument("runs", nargs="+", metavar="DA.nc", help="DA runs with deposition")
+    add_inputs(p, "DA runs with deposition")
     p.add_argument("--times", nargs="+", type=float, metavar="T", help="times (s); default 0.4 t_F and the end")
 
 
 @register("fig17", "h_T and h_D profiles of DA deposition runs at two times", _args17)
 def _fig17(args):
-    return fig17(args.runs, args.times)
+    k = classify(args.inputs, ("da",), "fig17")
+    return fig17(k["da"], args.times)
