@@ -21,7 +21,7 @@ TABLE1 = ["T10-A35", "T16-A35", "T22-A35", "T16-A50", "T22-A50", "T10-A70", "T22
           "T16-A100", "T22-A100", "T10-A120", "T16-A120", "T22-A120", "T22-A150"]
 TABLE5_GEOMETRIES = ["T22-A30", "T22-A45", "T22-A124"]
 FIGURES = ["fig5", "fig7", "fig8", "fig9", "fig10", "fig11", "fig12", "fig13", "fig15", "fig16",
-           "fig17", "figA1", "figA2"]
+           "fig17", "figA1", "figA2", "figA3"]
 
 
 @pytest.fixture(scope="module")

@@ -68,6 +68,7 @@ FIGURES = {
     "fig17": "fig17_depth_profiles.png",
     "figA1": "figA1_wm_momentum.png",
     "figA2": "figA2_wm_rms.png",
+    "figA3": "figA3_fd_interface_all.png",
 }
 
 
@@ -80,7 +81,7 @@ ACTIVE_FIGURES = [
     name
     for name in FIGURES
     if not (name in ("figA1", "figA2") and not WM_CASES)
-    and not (name in ("fig5", "fig7", "fig8", "fig9", "fig10", "fig11") and not fig_cases(name))
+    and not (name in ("fig5", "fig7", "fig8", "fig9", "fig10", "fig11", "figA3") and not fig_cases(name))
 ]
 
 REGRESSION_OUTPUTS = [

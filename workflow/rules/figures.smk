@@ -36,6 +36,7 @@ FIGURE_INPUTS = {
     "figA1": ("Appendix", [f"{RESULTS}/wm/{c}.nc" for c in fig_cases("figA1") if c in WM_CASES]
                           or [f"{RESULTS}/wm/{c}.nc" for c in WM_CASES[:1]]),
     "figA2": ("Appendix", [f"{RESULTS}/wm/{c}.nc" for c in WM_CASES]),
+    "figA3": ("Appendix", _isph(fig_cases("figA3")) + _sections(fig_cases("figA3"))),
 }
 
 for _name in ACTIVE_FIGURES:

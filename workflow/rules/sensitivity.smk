@@ -141,10 +141,32 @@ rule sensitivity_da:
         " --coefficients {input.coefficients} --n-particles {params.n_particles} -o {output} > {log} 2>&1"
 
 
-rule figure_sensitivity:
+rule sensitivity_table:
+    """parameter, value, A, B, final_runout_norm, flow_time per run (the baseline at the paper value)."""
     input:
         coefficients=expand(f"{SENS_DIR}/regression/{{sens}}/coefficients.csv", sens=SENS_RUNS),
         da=expand(f"{SENS_DIR}/da/{{sens}}.nc", sens=SENS_RUNS),
+    output:
+        f"{SENS_DIR}/sensitivity.csv",
+    params:
+        python=sys.executable,
+        baseline=" ".join(f"{k}={v}" for k, v in SENS["paper_values"].items()),
+        runs=" ".join(
+            f"{r}={SENS_DIR}/regression/{r}/coefficients.csv,{SENS_DIR}/da/{r}.nc" for r in SENS_RUNS
+        ),
+    log:
+        f"{LOGS}/sensitivity/table.log",
+    benchmark:
+        f"{BENCH}/sensitivity/table.tsv"
+    threads: 1
+    shell:
+        "{params.python} workflow/scripts/sensitivity_table.py -o {output} --baseline-values {params.baseline}"
+        " -- {params.runs} > {log} 2>&1"
+
+
+rule figure_sensitivity:
+    input:
+        f"{SENS_DIR}/sensitivity.csv",
     output:
         report(f"{RESULTS}/figures/sensitivity.png", caption="../report/sensitivity.rst", category="Sensitivity"),
     log:
