@@ -194,3 +194,43 @@ def test_width_sensitivity_zero_for_uniform_flow():
     assert ds.width_factor.values.tolist() == [1.0, 2.0, 3.0, 4.0]
     np.testing.assert_allclose(ds.rms_deviation.values, 0.0, atol=1e-15)
     check_contract(ds)
+
+
+def test_width_sensitivity_matches_separate_monitor_runs():
+    # x-dependent, decelerating flow: each width averages a different particle set
+    x, y = lattice(0.181, 0.621, 8, DX)  # off-centre lattice: each width holds a different set
+    times = np.linspace(0.0, 1.0, 21)
+    frames = []
+    for t in times:
+        u0 = 1.0 * (1 - t) if t > 0.2 else 5.0 * t
+        u = u0 * (1.0 + 40.0 * (x - 0.4) ** 2 + 0.3 * np.sin(x / DX))
+        u = np.where(y > 2 * DX, u, 0.0)
+        frames.append((x, y, u, np.zeros_like(u)))
+    run = make_run(frames, times=times)
+    wm = monitor_wm(run)
+    ref = monitor(run, width_factor=2.0).momentum_norm.values
+    mask = deceleration_mask(ref, 0.01)
+    assert np.all(mask.sum(axis=1) >= 10)  # a real deceleration window in every section
+    for j, w in enumerate(wm.width_factor.values):
+        mine = monitor(run, width_factor=float(w)).momentum_norm.values
+        np.testing.assert_allclose(wm.momentum_norm.values[j], mine, rtol=1e-12)
+        d = (mine - ref)[mask].reshape(-1)
+        expect = [np.sqrt(np.mean(((mine - ref)[k][mask[k]]) ** 2)) for k in range(11)]
+        np.testing.assert_allclose(wm.rms_deviation.values[j], expect, rtol=1e-12, atol=1e-15)
+        if w != 2.0:
+            assert np.all(wm.rms_deviation.values[j] > 0) and d.size
+    np.testing.assert_array_equal(wm.deceleration.values.astype(bool), mask)
+
+
+@pytest.mark.slow
+def test_kernels_also_work_uncompiled():
+    """The numba kernels give the same answers as plain Python (NUMBA_DISABLE_JIT=1)."""
+    import os
+    import subprocess
+    import sys
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
+    here = os.path.dirname(__file__)
+    res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", here, "-k",
+                          "planted_interface or divr or empty or section_reduce or membership"],
+                         env=env, capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stdout[-2000:] + res.stderr[-2000:]
