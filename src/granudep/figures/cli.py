@@ -43,7 +43,7 @@ def _cmd_summary(args) -> int:
     from ..report import build_summary
     from ..io import write_text
     text = build_summary(regression=args.regression, compare=args.compare, verification=args.verification or [],
-                         benchmarks=args.benchmarks, figures=args.figures)
+                         benchmarks=args.benchmarks, figures=args.figures, output=args.output)
     write_text(text, args.output)
     LOG.info("summary written to %s", args.output)
     return 0

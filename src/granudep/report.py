@@ -1,0 +1,239 @@
+"""``results/summary.md``: the paper-vs-ours tables, verification and benchmarks, read from the outputs.
+
+Every number in the summary comes from a file given on the command line (regression tables,
+``granudep compare`` output, ``granudep verify`` outputs, benchmark files); the paper's values
+come from those files too (the regression tables carry them) or from the package's copies of the
+paper's tables, and the paper's stated Fig 16 maxima from :data:`granudep.compare.PAPER_MAX_ERRORS`
+(Section 4.3). A missing input gives an explicit "not available" line, never a crash.
+"""
+from __future__ import annotations
+
+import csv
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ._version import __version__
+from .compare import PAPER_MAX_ERRORS, improvement, max_errors
+
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def _fmt(v, spec: str = ".3g") -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, (bool, np.bool_)):
+        return "yes" if v else "no"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        s = str(v)
+        return s.replace("|", "\\|").replace("\n", " ") if s and s != "nan" else "–"
+    return "–" if not math.isfinite(f) else format(f, spec)
+
+
+def md_table(df: pd.DataFrame, columns: dict[str, tuple[str, str]]) -> str:
+    """Markdown table of ``df``: columns = {column: (header, format spec)}; absent columns skipped."""
+    cols = [(c, h, f) for c, (h, f) in columns.items() if c in df.columns]
+    lines = ["| " + " | ".join(h for _, h, _ in cols) + " |", "|" + "|".join("---" for _ in cols) + "|"]
+    for _, row in df.iterrows():
+        lines.append("| " + " | ".join(_fmt(row[c], f) for c, _, f in cols) + " |")
+    return "\n".join(lines)
+
+
+def _missing(what: str, path) -> str:
+    return f"_Not available: {what} ({'not given' if path is None else f'{path} not found'})._\n"
+
+
+def _read_csv(path) -> pd.DataFrame | None:
+    if path is None or not Path(path).is_file():
+        return None
+    return pd.read_csv(path)
+
+
+def _pct_mean(s: pd.Series) -> str:
+    s = pd.to_numeric(s, errors="coerce").abs()
+    s = s[np.isfinite(s)]
+    return f"{s.mean():.1f} %" if len(s) else "–"
+
+
+def section_table3(regression) -> str:
+    out = ["## Table 3: critical times (t_s)_C, paper vs ours\n"]
+    path = Path(regression) / "table3_comparison.csv" if regression is not None else None
+    df = _read_csv(path)
+    if df is None:
+        return "\n".join(out) + _missing("Table 3 comparison", path)
+    out.append(f"Source: `{path}`. (t_s)_C = onset of deposition (h_D starts to grow); 'fit' = intercept of the "
+               "linear fit of h_D vs t_s (the paper's Fig 9 reading).\n")
+    out.append(md_table(df, {"case": ("case", ""), "x_norm": ("[x]", ".1f"),
+                             "t_s_critical_paper": ("paper", ".2f"), "t_s_critical": ("ours (onset)", ".2f"),
+                             "rel_diff_pct": ("rel. diff. %", "+.1f"), "t_s_critical_fit": ("ours (fit)", ".2f"),
+                             "rel_diff_fit_pct": ("rel. diff. (fit) %", "+.1f"), "status": ("status", "")}))
+    out.append(f"\nMean |relative difference|: onset {_pct_mean(df.get('rel_diff_pct', pd.Series(dtype=float)))}, "
+               f"fit intercept {_pct_mean(df.get('rel_diff_fit_pct', pd.Series(dtype=float)))} "
+               f"over {len(df)} (case, [x]) pairs.\n")
+    return "\n".join(out)
+
+
+def section_table5(regression) -> str:
+    out = ["## Table 5: A and B of (hu)_C/p0 = A[x] + B at θ = 22°, paper vs ours\n"]
+    path = Path(regression) / "table5_comparison.csv" if regression is not None else None
+    df = _read_csv(path)
+    if df is None:
+        return "\n".join(out) + _missing("Table 5 comparison", path)
+    out.append(f"Source: `{path}`.\n")
+    out.append(md_table(df, {"case": ("case", ""), "run_case": ("2D run", ""), "a": ("a", ".3g"),
+                             "A_paper": ("A paper", ".4f"), "A": ("A ours", ".4f"), "A_rel_diff_pct": ("A rel. diff. %", "+.0f"),
+                             "B_paper": ("B paper", ".4f"), "B": ("B ours", ".4f"), "B_rel_diff_pct": ("B rel. diff. %", "+.0f"),
+                             "r2": ("R²", ".3f")}))
+    if {"B_paper_over_p0", "B_rel_diff_if_dimensional_pct"} <= set(df.columns):
+        out.append("\nIf the printed A, B were dimensional (m²/s, i.e. (hu)_C = A[x] + B), the normalised values "
+                   "would be A/p0, B/p0:\n")
+        out.append(md_table(df, {"case": ("case", ""), "p0": ("p0 (m²/s)", ".4f"),
+                                 "A_paper_over_p0": ("A paper/p0", ".4f"), "A_rel_diff_if_dimensional_pct": ("A rel. diff. %", "+.0f"),
+                                 "B_paper_over_p0": ("B paper/p0", ".4f"), "B_rel_diff_if_dimensional_pct": ("B rel. diff. %", "+.0f")}))
+    out.append("")
+    return "\n".join(out)
+
+
+def section_compare(compare) -> str:
+    out = ["## Figs 15–16: DA runs vs references (final runout, flow time)\n"]
+    df = _read_csv(compare)
+    if df is None:
+        return "\n".join(out) + _missing("comparison table", compare)
+    if "reference" not in df.columns:
+        from .compare import source_label
+        df["reference"] = [source_label(p) for p in df["provenance"]]
+    out.append(f"Source: `{compare}`. Relative error = (computed − reference)/reference. Runout ΔL/L0 from the gate.\n")
+    show = df.copy()
+    for c in ("runout_rel_error", "flow_time_rel_error"):
+        show[c] = pd.to_numeric(show[c], errors="coerce") * 100
+    out.append(md_table(show, {"case": ("case", ""), "variant": ("DA variant", ""), "reference": ("reference", ""),
+                               "final_runout_norm": ("ΔL/L0 DA", ".3f"), "reference_final_runout_norm": ("ΔL/L0 ref.", ".3f"),
+                               "runout_rel_error": ("runout error %", "+.1f"), "flow_time": ("t_F DA (s)", ".3f"),
+                               "reference_flow_time": ("t_F ref. (s)", ".3f"), "flow_time_rel_error": ("flow-time error %", "+.1f")}))
+    defs = sorted({str(d) for c in ("da_front_definition", "reference_front_definition") if c in df for d in df[c]
+                   if isinstance(d, str) and d})
+    if defs:
+        out.append("\nFront definitions: " + "; ".join(f"_{d}_" for d in defs) + ".\n")
+    imp = improvement(df)
+    out.append("\n**Does deposition improve the DA prediction?** (|error| with deposition < without)\n")
+    if imp.empty:
+        out.append("_Not available: no case has both a reference and a DA run._\n")
+    else:
+        for c in ("runout_error_nodep", "runout_error_dep", "flow_time_error_nodep", "flow_time_error_dep"):
+            imp[c] = imp[c] * 100
+        out.append(md_table(imp, {"case": ("case", ""), "reference": ("reference", ""),
+                                  "runout_error_nodep": ("runout err. no dep. %", "+.1f"),
+                                  "runout_error_dep": ("runout err. dep. %", "+.1f"), "runout_improved": ("runout improved", ""),
+                                  "flow_time_error_nodep": ("t_F err. no dep. %", "+.1f"),
+                                  "flow_time_error_dep": ("t_F err. dep. %", "+.1f"), "flow_time_improved": ("t_F improved", "")}))
+    mx = max_errors(df)
+    out.append("\n**Maximum |error|, ours vs the paper's stated maxima** (the paper's are against Farin et al. 2014 "
+               "measurements, which are not available to us; ours are against the references above)\n")
+    if mx.empty:
+        out.append("_Not available._\n")
+    else:
+        mx = mx.assign(max_abs_rel_error=mx.max_abs_rel_error * 100, paper_max_error=mx.paper_max_error * 100)
+        out.append(md_table(mx, {"variant": ("DA variant", ""), "quantity": ("quantity", ""), "reference": ("reference", ""),
+                                 "max_abs_rel_error": ("ours max |error| %", ".1f"), "case": ("at case", ""),
+                                 "paper_max_error": ("paper max error %", ".0f"), "paper_case_a": ("paper at a", ".3g")}))
+    out.append("")
+    return "\n".join(out)
+
+
+def section_verification(paths) -> str:
+    out = ["## Verification (analytic and conservation checks)\n"]
+    if not paths:
+        return "\n".join(out) + _missing("verification tables", None)
+    for p in paths:
+        df = _read_csv(p)
+        if df is None:
+            out.append(_missing("verification table", p))
+            continue
+        passed = df["passed"].astype(str).str.lower().isin(["true", "1", "yes"]) if "passed" in df else None
+        head = f"### `{p}`"
+        if passed is not None:
+            head += f": {int(passed.sum())} of {len(df)} checks within tolerance"
+        out.append(head + "\n")
+        show = df.copy()
+        if passed is not None:
+            show["passed"] = np.where(passed, "yes", "**NO**")
+        out.append(md_table(show, {"check": ("check", ""), "quantity": ("quantity", ""), "value": ("value", ".4g"),
+                                   "reference": ("reference", ".4g"), "error": ("error", ".3g"),
+                                   "tolerance": ("tolerance", ".3g"), "passed": ("passed", ""), "note": ("note", "")}))
+        out.append("")
+    return "\n".join(out)
+
+
+def _benchmark_records(root: Path) -> pd.DataFrame:
+    rows = []
+    for f in sorted(root.rglob("*.tsv")):
+        with f.open() as fh:
+            recs = list(csv.DictReader(fh, delimiter="\t"))
+        for r in recs:
+            rows.append({"job": str(f.relative_to(root).with_suffix("")), "s": pd.to_numeric(r.get("s"), errors="coerce"),
+                         "max_rss": pd.to_numeric(r.get("max_rss"), errors="coerce")})
+    return pd.DataFrame(rows, columns=["job", "s", "max_rss"])
+
+
+def section_benchmarks(benchmarks) -> str:
+    out = ["## Benchmarks\n"]
+    if benchmarks is None or not Path(benchmarks).exists():
+        return "\n".join(out) + _missing("benchmarks", benchmarks)
+    p = Path(benchmarks)
+    if p.is_dir():
+        df = _benchmark_records(p)
+        if df.empty:
+            return "\n".join(out) + f"_Not available: no benchmark .tsv file under {p}._\n"
+        df = df.sort_values("s", ascending=False)
+        out.append(f"Snakemake benchmark files under `{p}` (wall seconds, peak memory MB), {len(df)} jobs, "
+                   f"total {df['s'].sum():.1f} s of job time (jobs may run in parallel).\n")
+        out.append(md_table(df, {"job": ("job", ""), "s": ("wall time (s)", ".1f"), "max_rss": ("max RSS (MB)", ".0f")}))
+    else:
+        df = pd.read_csv(p)
+        out.append(f"Source: `{p}`.\n")
+        out.append(md_table(df, {c: (c, ".4g") for c in df.columns}))
+    out.append("")
+    return "\n".join(out)
+
+
+def section_figures(figures, out_dir: Path | None) -> str:
+    out = ["## Figures\n"]
+    if figures is None or not Path(figures).is_dir():
+        return "\n".join(out) + _missing("figures folder", figures)
+    files = sorted(f for f in Path(figures).iterdir() if f.suffix.lower() in FIGURE_SUFFIXES)
+    if not files:
+        return "\n".join(out) + f"_Not available: no figure file in {figures}._\n"
+    for f in files:
+        rel = os.path.relpath(f, out_dir) if out_dir is not None else str(f)
+        out.append(f"- [{f.name}]({rel}) ({f.stat().st_size / 1024:.0f} kB)")
+    out.append("")
+    return "\n".join(out)
+
+
+def build_summary(regression=None, compare=None, verification=(), benchmarks=None, figures=None,
+                  output=None) -> str:
+    """The Markdown summary text (see module docstring)."""
+    out_dir = Path(output).parent if output is not None else None
+    parts = [
+        "# granudep: reproduction summary (Nikooei & Choi 2022)\n",
+        f"Generated by granudep {__version__}. Every number below is read from the files named in each section; "
+        "the paper's values come from the same files or from the paper's tables shipped with granudep. "
+        f"The paper's Fig 16 maxima (Section 4.3): without deposition {PAPER_MAX_ERRORS['no deposition']['runout']:.0%} "
+        f"runout / {PAPER_MAX_ERRORS['no deposition']['flow_time']:.0%} flow time, with deposition "
+        f"{PAPER_MAX_ERRORS['deposition']['runout']:.0%} / {PAPER_MAX_ERRORS['deposition']['flow_time']:.0%}, "
+        "against Farin et al. (2014) measurements, which are not available to us.\n",
+        section_table3(regression),
+        section_table5(regression),
+        section_compare(compare),
+        section_verification(list(verification or [])),
+        section_benchmarks(benchmarks),
+        section_figures(figures, out_dir),
+    ]
+    return "\n".join(parts)

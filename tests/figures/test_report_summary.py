@@ -1,0 +1,67 @@
+"""granudep summary: numbers come from the files; missing inputs give 'Not available' lines."""
+import pandas as pd
+import pytest
+
+import synthetic_data as syn
+from granudep.cli import main
+from granudep.compare import compare
+from granudep.report import build_summary, md_table
+
+
+@pytest.fixture()
+def inputs(tmp_path):
+    reg = tmp_path / "regression"
+    reg.mkdir()
+    pd.DataFrame({"case": ["T22-A70"], "x_norm": [0.2], "t_s_critical_paper": [7.90], "t_s_critical": [8.137],
+                  "rel_diff_pct": [3.0], "t_s_critical_fit": [7.5], "rel_diff_fit_pct": [-5.06], "status": ["ok"]}
+                 ).to_csv(reg / "table3_comparison.csv", index=False)
+    pd.DataFrame({"case": ["1D-A70"], "run_case": ["T22-A70"], "a": [0.7], "A_paper": [-0.0313], "A": [-0.0271],
+                  "A_rel_diff_pct": [13.4], "B_paper": [0.0402], "B": [0.0533], "B_rel_diff_pct": [32.6],
+                  "r2": [0.987]}).to_csv(reg / "table5_comparison.csv", index=False)
+    ref = pd.DataFrame({"case": ["1D-A70"], "final_runout_norm": [1.5], "flow_time": [1.0], "provenance": ["planted"]})
+    cmp = tmp_path / "cmp.csv"
+    compare([syn.da_run("1D-A70", True, 1.8, 1.2), syn.da_run("1D-A70", False, 2.25, 1.5)], [ref]).to_csv(cmp, index=False)
+    ver = tmp_path / "da.csv"
+    pd.DataFrame({"check": ["ritter", "mass"], "quantity": ["front", "volume"], "value": [1.01, 1e-15],
+                  "reference": [1.0, 0.0], "error": [0.01, 1e-15], "tolerance": [0.02, 1e-12],
+                  "passed": [True, False], "note": ["", ""]}).to_csv(ver, index=False)
+    bench = tmp_path / "bench" / "isph"
+    bench.mkdir(parents=True)
+    (bench / "T22-A70.tsv").write_text("s\th:m:s\tmax_rss\n123.4\t0:02:03\t456.7\n")
+    figs = tmp_path / "figures"
+    figs.mkdir()
+    (figs / "fig5_free_surface.png").write_bytes(b"\x89PNG" + b"0" * 2000)
+    return {"regression": reg, "compare": cmp, "verification": [ver], "benchmarks": tmp_path / "bench",
+            "figures": figs, "output": tmp_path / "summary.md"}
+
+
+def test_summary_numbers_from_files(inputs):
+    text = build_summary(**inputs)
+    assert "| T22-A70 | 0.2 | 7.90 | 8.14 | +3.0 | 7.50 | -5.1 | ok |" in text
+    assert "| 1D-A70 | T22-A70 | 0.7 | -0.0313 | -0.0271 | +13 | 0.0402 | 0.0533 | +33 | 0.987 |" in text
+    assert "+20.0" in text and "+50.0" in text                     # planted DA errors
+    assert "| 1D-A70 | planted | +50.0 | +20.0 | yes |" in text      # deposition improves the runout
+    assert "1 of 2 checks within tolerance" in text and "**NO**" in text
+    assert "| isph/T22-A70 | 123.4 | 457 |" in text
+    assert "[fig5_free_surface.png](figures/fig5_free_surface.png)" in text
+    assert "Not available" not in text
+
+
+def test_summary_missing_inputs_do_not_crash(tmp_path):
+    text = build_summary(regression=tmp_path / "nope", compare=None, verification=[tmp_path / "v.csv"],
+                         benchmarks=None, figures=None)
+    assert text.count("_Not available") == 6  # table 3, table 5, compare, verification, benchmarks, figures
+    assert "table3_comparison.csv not found" in text
+
+
+def test_cli_summary(inputs, tmp_path):
+    out = tmp_path / "out" / "summary.md"
+    args = ["summary", "-o", str(out), "--regression", str(inputs["regression"]), "--compare", str(inputs["compare"]),
+            "--verification", *map(str, inputs["verification"]), "--benchmarks", str(inputs["benchmarks"])]
+    assert main(args) == 0
+    assert "## Table 3" in out.read_text()
+
+
+def test_md_table_escapes_and_formats():
+    t = md_table(pd.DataFrame({"a": ["x|y"], "b": [float("nan")], "c": [True]}), {"a": ("A", ""), "b": ("B", ".2f"), "c": ("C", "")})
+    assert t.splitlines()[2] == "| x\\|y | – | yes |"
