@@ -1,0 +1,224 @@
+"""Configuration of the 1D depth-averaged (DA) SPH model: frozen dataclasses built once at the edge.
+
+Angles are degrees here (``*_deg``), radians inside the solver. A run is described by
+``DAConfig``; :func:`resolve` builds it from a Table 5 case name, a YAML path or a dict, plus
+overrides, and checks every key and range before any work starts (one-line ``ConfigError``).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal, Mapping
+
+from ..cases import check_case_name, material, momentum_scale, table5
+from ..config import ConfigError, build, load_yaml, merge, param
+
+_GLASS = material("glass_beads")
+
+
+@dataclass(frozen=True)
+class Geometry:
+    L0: float = param(0.2, gt=0.0, unit="m", doc="column length along the slope (gate at x = L0)")
+    H0: float = param(0.14, gt=0.0, unit="m", doc="column height (bed-normal)")
+    theta_deg: float = param(22.0, ge=0.0, lt=90.0, unit="deg", doc="slope angle")
+    x_max: float | None = param(None, gt=0.0, unit="m",
+                                doc="end of the domain and deposit grid; null: L0 + 60 H0")
+    back_wall: bool = param(True, doc="mirror (ghost) wall at x = 0 holding the column")
+
+    def validate(self, prefix: str) -> None:
+        p = f"{prefix}." if prefix else ""
+        if self.x_max is not None and self.x_max <= self.L0:
+            raise ConfigError(f"{p}x_max: must be > L0 = {self.L0} (got {self.x_max})")
+
+    @property
+    def domain_end(self) -> float:
+        return self.x_max if self.x_max is not None else self.L0 + 60.0 * self.H0
+
+
+@dataclass(frozen=True)
+class Material:
+    name: str = param("glass_beads", doc="label only")
+    d: float = param(_GLASS["d"], gt=0.0, unit="m", doc="grain diameter (sets the front threshold 2 d)")
+    rho: float = param(_GLASS["rho"], gt=0.0, unit="kg m-3", doc="bulk density (cancels out of the DA equations)")
+    phi_internal_deg: float = param(25.5, gt=0.0, lt=90.0, unit="deg", doc="internal friction angle φ_I")
+    phi_basal_deg: float = param(25.5, ge=0.0, lt=90.0, unit="deg", doc="basal friction angle φ_B")
+
+
+@dataclass(frozen=True)
+class Numerics:
+    n_particles: int = param(1000, ge=20, le=200000, doc="particles in the initial column")
+    smoothing: Literal["eq25", "fixed"] = param("eq25", doc="eq 25 variable L_s, or a fixed L_s")
+    smoothing_B: float = param(10.0, gt=0.0, le=500.0, doc="B of eq 25 (L_s = B x mean spacing; paper: 50)")
+    L_s: float | None = param(None, gt=0.0, unit="m", doc="fixed smoothing length (smoothing: fixed)")
+    kernel_support: float = param(3.0, ge=2.0, le=6.0, doc="Gaussian cut-off in units of L_s (paper: 2)")
+    cfl: float = param(0.2, gt=0.0, le=1.0, doc="CFL number of eq 32")
+    xsph_delta: float = param(0.05, ge=0.0, le=0.5, doc="δ of the XSPH correction eq 33")
+    earth_pressure: Literal["paper", "savage_hutter", "one"] = param(
+        "paper", doc="k: eqs 8-9 with θ (paper), with φ_B (Savage-Hutter), or k = 1")
+    basal_friction: bool = param(True, doc="Coulomb basal friction tan φ_B (off for the Ritter check)")
+    t_end: float = param(20.0, gt=0.0, unit="s", doc="hard stop if the flow has not come to rest")
+    u_rest: float = param(1e-4, gt=0.0, unit="m s-1", doc="at rest when every |u| is below this")
+    max_steps: int = param(5_000_000, ge=1)
+
+    def validate(self, prefix: str) -> None:
+        p = f"{prefix}." if prefix else ""
+        if self.smoothing == "fixed" and self.L_s is None:
+            raise ConfigError(f"{p}L_s: required (> 0, m) when {p}smoothing is 'fixed'")
+
+
+@dataclass(frozen=True)
+class Deposition:
+    enabled: bool = param(True, doc="deposition source term (eqs 12, 14, 34, 36)")
+    ab_source: Literal["paper", "computed", "user"] = param(
+        "paper", doc="A, B from Table 5 (paper), from a coefficients.csv (computed), or A/B keys (user)")
+    A: float | None = param(None, doc="slope A of eq 36 (ab_source user)")
+    B: float | None = param(None, doc="intercept B of eq 36 (ab_source user)")
+    coefficients: str | None = param(None, doc="coefficients.csv of `granudep regress` (ab_source computed)")
+    coefficient_units: Literal["normalised", "dimensional"] = param(
+        "normalised", doc="(hu)_C = p0 (A[x] + B) (eq 36 as printed) or A[x] + B in m2/s")
+    x_inf_mode: Literal["self-consistent", "no-deposition", "user"] = param("self-consistent")
+    x_inf: float | None = param(None, gt=0.0, unit="m", doc="x∞ for x_inf_mode user (from the back wall)")
+    x_inf_tol: float = param(1e-3, gt=0.0, unit="m", doc="bracket width at which the x∞ iteration stops")
+    x_inf_residual_tol: float = param(0.02, gt=0.0, le=1.0,
+                                      doc="max |x_front(x∞) − x∞| / (x∞ − L0) accepted")
+    x_inf_max_iter: int = param(30, ge=1, le=200)
+    clamp_x: bool = param(True, doc="clamp [x] to [0, 1], the range eq 36 was fitted on")
+    u_min: float = param(0.1, gt=0.0, unit="m s-1",
+                         doc="regularises 1/u of eq 14: S_D = α d(hu)/dt / max(|u|, u_min)")
+    momentum_term: Literal["eq12", "none"] = param(
+        "eq12", doc="deposition momentum loss g tanφ_I Δh_D / h (eq 12) or none")
+    min_volume_fraction: float = param(1e-6, gt=0.0, lt=1.0,
+                                       doc="a particle below this fraction of its initial volume deposits entirely")
+
+    def validate(self, prefix: str) -> None:
+        p = f"{prefix}." if prefix else ""
+        if self.ab_source == "user" and (self.A is None or self.B is None):
+            raise ConfigError(f"{p}A: {p}A and {p}B are required (numbers) when {p}ab_source is 'user'")
+        if self.ab_source == "computed" and not self.coefficients:
+            raise ConfigError(f"{p}coefficients: a coefficients.csv path is required when {p}ab_source is 'computed'")
+        if self.x_inf_mode == "user" and self.x_inf is None:
+            raise ConfigError(f"{p}x_inf: required (m, > L0) when {p}x_inf_mode is 'user'")
+
+
+@dataclass(frozen=True)
+class Output:
+    dt_output: float = param(0.02, gt=0.0, unit="s", doc="interval between stored states")
+    dx_grid: float = param(1e-3, gt=0.0, unit="m", doc="cell size of the fixed grid (profiles, deposit, front)")
+    front_depth_threshold: float | None = param(None, gt=0.0, unit="m", doc="front threshold; null: 2 d")
+    flow_time_tolerance: float = param(1e-3, gt=0.0, unit="m", doc="front advance below which the flow is at rest")
+    progress_every_s: float = param(5.0, gt=0.0, unit="s", doc="wall seconds between progress lines")
+
+
+@dataclass(frozen=True)
+class DAConfig:
+    case: str = param("user", doc="case name (file names): Table 5 name or [A-Za-z0-9_-]+")
+    geometry: Geometry = field(default_factory=Geometry)
+    material: Material = field(default_factory=Material)
+    numerics: Numerics = field(default_factory=Numerics)
+    deposition: Deposition = field(default_factory=Deposition)
+    output: Output = field(default_factory=Output)
+
+    def validate(self, prefix: str) -> None:
+        check_case_name(self.case)
+        g, m, d = self.geometry, self.material, self.deposition
+        if d.x_inf_mode == "user" and d.x_inf is not None and d.x_inf <= g.L0:
+            raise ConfigError(f"deposition.x_inf: must be > geometry.L0 = {g.L0} (got {d.x_inf})")
+        if self.numerics.earth_pressure == "paper" and g.theta_deg > m.phi_internal_deg:
+            raise ConfigError(
+                f"geometry.theta_deg: must be <= material.phi_internal_deg = {m.phi_internal_deg} for "
+                f"numerics.earth_pressure 'paper' (eqs 8-9 have no real value; got {g.theta_deg})")
+        if self.numerics.earth_pressure == "savage_hutter" and m.phi_basal_deg > m.phi_internal_deg:
+            raise ConfigError(
+                f"material.phi_basal_deg: must be <= material.phi_internal_deg = {m.phi_internal_deg} for "
+                f"numerics.earth_pressure 'savage_hutter' (no real k; got {m.phi_basal_deg})")
+        if d.enabled and d.ab_source == "paper" and self.case not in set(table5().case_id):
+            raise ConfigError(
+                f"deposition.ab_source: 'paper' needs a Table 5 case (one of {', '.join(table5().case_id)}) "
+                f"as `case` (got {self.case!r}); use 'user' with deposition.A and deposition.B")
+
+    # derived quantities -------------------------------------------------------------
+    @property
+    def theta(self) -> float:
+        return math.radians(self.geometry.theta_deg)
+
+    @property
+    def front_threshold(self) -> float:
+        t = self.output.front_depth_threshold
+        return 2.0 * self.material.d if t is None else t
+
+    @property
+    def p0(self) -> float:
+        return momentum_scale(self.geometry.H0, self.theta)
+
+
+SECTIONS = ("geometry", "material", "numerics", "deposition", "output")
+
+
+def _leaf_index() -> dict[str, str]:
+    """Unique leaf key -> section (for flat overrides such as ``n_particles=500``)."""
+    seen: dict[str, list[str]] = {}
+    for sec, cls in zip(SECTIONS, (Geometry, Material, Numerics, Deposition, Output)):
+        for f in dataclasses.fields(cls):
+            seen.setdefault(f.name, []).append(sec)
+    return {k: v[0] for k, v in seen.items() if len(v) == 1}
+
+
+def case_mapping(name: str) -> dict:
+    """Config mapping of a Table 5 case (geometry, friction angles, the paper's A and B)."""
+    t5 = table5()
+    row = t5[t5.case_id == name]
+    if row.empty:
+        raise ConfigError(f"case: unknown DA case {name!r} (allowed: {', '.join(t5.case_id)}, or a YAML path)")
+    r = row.iloc[0]
+    return {"case": name,
+            "geometry": {"L0": float(r.L0_m), "H0": float(r.H0_m), "theta_deg": float(r.theta_deg)},
+            "material": {"phi_internal_deg": float(r.phi_internal_deg), "phi_basal_deg": float(r.phi_basal_deg)}}
+
+
+def overrides_mapping(overrides: Mapping[str, Any]) -> dict:
+    """Turn ``run_da`` keyword overrides (section dicts or unique leaf names) into a nested mapping."""
+    leaf = _leaf_index()
+    out: dict = {}
+    for key, value in overrides.items():
+        if value is None:
+            continue
+        if key in SECTIONS:
+            if not isinstance(value, Mapping):
+                raise ConfigError(f"{key}: must be a mapping")
+            out = merge(out, {key: dict(value)})
+        elif key == "case":
+            out["case"] = value
+        elif key in leaf:
+            out = merge(out, {leaf[key]: {key: value}})
+        else:
+            raise ConfigError(f"{key}: unknown override (allowed: a section {list(SECTIONS)} or a unique key "
+                              f"such as n_particles, cfl, x_inf_mode)")
+    return out
+
+
+def resolve(case_or_config: str | Path | Mapping | DAConfig, deposition: bool | None = None,
+            **overrides) -> DAConfig:
+    """Build the validated ``DAConfig`` from a case name, YAML path or mapping plus overrides."""
+    if isinstance(case_or_config, DAConfig):
+        base: dict = dataclasses.asdict(case_or_config)
+    elif isinstance(case_or_config, Mapping):
+        base = dict(case_or_config)
+        if isinstance(base.get("case"), str) and base["case"] in set(table5().case_id):
+            base = merge(case_mapping(base["case"]), base)
+    elif isinstance(case_or_config, (str, Path)) and (str(case_or_config).endswith((".yaml", ".yml"))
+                                                      or Path(case_or_config).is_file()):
+        base = load_yaml(case_or_config)
+        if "case" not in base:
+            base["case"] = Path(case_or_config).stem
+        if isinstance(base.get("case"), str) and base["case"] in set(table5().case_id):
+            base = merge(case_mapping(base["case"]), base)
+    elif isinstance(case_or_config, str):
+        base = case_mapping(case_or_config)
+    else:
+        raise ConfigError(f"case: expected a case name, YAML path or mapping (got {type(case_or_config).__name__})")
+    data = merge(base, overrides_mapping(overrides))
+    if deposition is not None:
+        data = merge(data, {"deposition": {"enabled": bool(deposition)}})
+    return build(DAConfig, data)
