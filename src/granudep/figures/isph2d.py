@@ -194,8 +194,14 @@ def fig7(runs, ts=None, sections=(), n_times: int = 4):
     for ax in axes.ravel():
         if not ax.has_data():
             ax.set_visible(False)
-    h, l = axes[0, 0].get_legend_handles_labels()
-    fig.legend(h, l, loc="outside upper center", ncol=4, fontsize=8, markerscale=4)
+    from matplotlib.lines import Line2D
+    handles = [Line2D([], [], ls="none", marker="o", ms=5, color="0.6", label="deposited (speed < 0.1 m/s)"),
+               Line2D([], [], ls="none", marker="o", ms=5, color="C1", label="flowing"),
+               Line2D([], [], ls="--", color="k", label="F/D interface (particles)")]
+    if secs:
+        handles.append(Line2D([], [], ls="none", marker="o", ms=4, mfc="none", mec="C3",
+                              label="F/D interface at the sections (eq 16)"))
+    fig.legend(handles=handles, loc="outside upper center", ncol=4, fontsize=8)
     note(fig, "Vertical scale exaggerated. Deposited: particle speed below the critical 0.1 m/s (Section 2.2). "
               "Dashed: top of the deposited layer under the flowing one per 2 dx column (display estimate).")
     return fig
