@@ -53,7 +53,7 @@ class Numerics:
     smoothing_B: float = param(10.0, gt=0.0, le=500.0, doc="B of eq 25 (L_s = B x mean spacing; paper: 50)")
     L_s: float | None = param(None, gt=0.0, unit="m", doc="fixed smoothing length (smoothing: fixed)")
     kernel_support: float = param(3.0, ge=2.0, le=6.0, doc="Gaussian cut-off in units of L_s (paper: 2)")
-    cfl: float = param(0.2, gt=0.0, le=1.0, doc="CFL number of eq 32")
+    cfl: float = param(0.5, gt=0.0, le=1.0, doc="CFL number of eq 32 (paper: 0 < CFL <= 1, value not given)")
     xsph_delta: float = param(0.05, ge=0.0, le=0.5, doc="δ of the XSPH correction eq 33")
     earth_pressure: Literal["paper", "savage_hutter", "one"] = param(
         "paper", doc="k: eqs 8-9 with θ (paper), with φ_B (Savage-Hutter), or k = 1")
@@ -80,7 +80,7 @@ class Deposition:
         "normalised", doc="(hu)_C = p0 (A[x] + B) (eq 36 as printed) or A[x] + B in m2/s")
     x_inf_mode: Literal["self-consistent", "no-deposition", "user"] = param("self-consistent")
     x_inf: float | None = param(None, gt=0.0, unit="m", doc="x∞ for x_inf_mode user (from the back wall)")
-    x_inf_tol: float = param(1e-3, gt=0.0, unit="m", doc="bracket width at which the x∞ iteration stops")
+    x_inf_tol: float = param(5e-3, gt=0.0, unit="m", doc="bracket width at which the x∞ iteration stops")
     x_inf_residual_tol: float = param(0.02, gt=0.0, le=1.0,
                                       doc="max |x_front(x∞) − x∞| / (x∞ − L0) accepted")
     x_inf_max_iter: int = param(30, ge=1, le=200)

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from .kernels import gauss_gradw, gauss_w, kernel_norm
+from .kernels import gauss_w, kernel_norm
 from .neighbours import build_extended, count_ghosts, insertion_sort, windows
 from .physics import (alpha_coefficient, coulomb_update, critical_momentum, deposition_rate,
                       earth_pressure, net_acceleration)
@@ -44,39 +44,53 @@ N_PARAMS = 27
 RUNNING, AT_REST, NONFINITE, ESCAPED, MAX_STEPS = 0, 1, 2, 3, 4
 
 
-@njit(cache=True)
-def depth_pass(xe, Ve, m, n, lo, hi, L, norm, qc, h, nd):
-    """Eq 20, h_i = Σ_j V_j W_ij, and the number density Σ_j W_ij over particles with volume."""
+@njit(cache=True, fastmath=True)
+def depth_pass(xe, Ve, m, n, lo, hi, L, norm, qc, h, nd, E):
+    """Eq 20, h_i = Σ_j V_j W_ij, and the number density Σ_j W_ij over particles with volume.
+    Stores e^{−q²} of every pair in E (window of i at E[lo_i − lo_0 + …], see ``pair_offsets``)
+    so the gradient pass needs no second exponential."""
+    qc2 = qc * qc
+    ec = math.exp(-qc2)
+    p = 0
     for i in range(n):
         xi = xe[m + i]
         s = 0.0
         c = 0.0
         for j in range(lo[i], hi[i]):
+            q2 = ((xi - xe[j]) / L) ** 2
+            e = math.exp(-q2) if q2 < qc2 else 0.0
+            E[p] = e
+            p += 1
             vj = Ve[j]
-            if vj > 0.0:
-                w = gauss_w(xi - xe[j], L, norm, qc)
+            if vj > 0.0 and e > 0.0:
+                w = norm * (e - ec * (1.0 + qc2 - q2))
                 s += vj * w
                 c += w
         h[i] = s
         nd[i] = c
 
 
-@njit(cache=True)
-def gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, dhdx, dudx, xsph):
+@njit(cache=True, fastmath=True)
+def gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, E, dhdx, dudx, xsph):
     """Eqs 21–22 (∂h/∂x), eqs 28–29 (∂u/∂x, eq 29's sign corrected) and the XSPH sum of eq 33.
 
-    With eq 24's ∇W_ij = 2 r_ij/L² W_ij = −∂W_ij/∂x_i (r_ij = x_i − x_j):
+    With eq 24's ∇W_ij = 2 r_ij/L² W'_ij = −∂W_ij/∂x_i (r_ij = x_i − x_j, ``kernels.gauss_gradw``):
     ∂h/∂x_i = Σ V_j B1 ∇W_ij, B1 = −[Σ V_j/h_j W_ij]⁻¹ (as printed);
     ∂u/∂x_i = Σ V_j (u_j − u_i) B2 ∇W_ij, B2 = +[Σ V_j (x_j − x_i) ∇W_ij]⁻¹ (printed with a minus,
     which returns −∂u/∂x). Both are exact for linear fields where the kernel support is full; B2 is
-    exact for a linear u everywhere.
+    exact for a linear u everywhere. E holds e^{−q²} of every pair from ``depth_pass``.
     """
+    qc2 = qc * qc
+    ec = math.exp(-qc2)
+    g2 = 2.0 * norm / (L * L)
+    p = 0
     for i in range(n):
         k = m + i
         if Ve[k] <= 0.0:
             dhdx[i] = 0.0
             dudx[i] = 0.0
             xsph[i] = 0.0
+            p += hi[i] - lo[i]
             continue
         xi = xe[k]
         ui = ue[k]
@@ -87,14 +101,15 @@ def gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, dhdx, dudx, xsph):
         den = 0.0
         xs = 0.0
         for j in range(lo[i], hi[i]):
+            e = E[p]
+            p += 1
             vj = Ve[j]
-            if vj <= 0.0:
+            if vj <= 0.0 or e == 0.0:
                 continue
             r = xi - xe[j]
-            w = gauss_w(r, L, norm, qc)
-            if w == 0.0:
-                continue
-            gw = gauss_gradw(r, L, norm, qc)
+            q2 = (r / L) ** 2
+            w = norm * (e - ec * (1.0 + qc2 - q2))
+            gw = g2 * r * (e - ec)
             hj = he[j]
             if hj > 0.0:
                 shep += vj / hj * w
@@ -118,12 +133,16 @@ def evaluate(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h, nd, dhdx, dudx, xs
     build_extended(x, u, V, m, xe, ue, Ve)
     ne = m + n
     windows(xe, m, ne, radius, lo, hi)
-    depth_pass(xe, Ve, m, n, lo, hi, L, norm, qc, h, nd)
+    npairs = 0
+    for i in range(n):
+        npairs += hi[i] - lo[i]
+    E = np.empty(npairs)
+    depth_pass(xe, Ve, m, n, lo, hi, L, norm, qc, h, nd, E)
     for k in range(m):
         he[k] = h[m - 1 - k]
     for i in range(n):
         he[m + i] = h[i]
-    gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, dhdx, dudx, xsph)
+    gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, E, dhdx, dudx, xsph)
 
 
 @njit(cache=True)
@@ -141,7 +160,10 @@ def particle_depths(x, V, L, qc, wall):
     m = count_ghosts(x, radius, wall)
     build_extended(x, np.zeros(n), V, m, xe, ue, Ve)
     windows(xe, m, m + n, radius, lo, hi)
-    depth_pass(xe, Ve, m, n, lo, hi, L, kernel_norm(L, qc), qc, h, nd)
+    npairs = 0
+    for i in range(n):
+        npairs += hi[i] - lo[i]
+    depth_pass(xe, Ve, m, n, lo, hi, L, kernel_norm(L, qc), qc, h, nd, np.empty(npairs))
     return h
 
 

@@ -1,0 +1,107 @@
+"""The DA run as a CF-style ``xarray.Dataset`` (docs/data-contract.md, DA run)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+
+from ..cases import characteristic_time
+from ..config import to_yaml
+from ..front import flow_time
+from ..io import provenance, var
+
+FRONT_DEFINITION = ("down-slope edge of the contiguous run of grid cells, from the deepest cell, whose total "
+                    "depth h + h_D (SPH depth eq 20 on the grid plus deposit) is >= front_depth_threshold "
+                    "(granudep.front.front_from_profile)")
+
+
+def to_dataset(cfg, rec, *, deposition: bool, physics, A=float("nan"), B=float("nan"), ab_source="",
+               xinf=None) -> xr.Dataset:
+    """Assemble the dataset of one run (complete or stopped early)."""
+    g = cfg.geometry
+    time = np.asarray(rec.time, dtype=float)
+    front = np.asarray(rec.front, dtype=float)
+    dxg = cfg.output.dx_grid
+    flow = np.asarray(rec.flow_depth)
+    depo = np.asarray(rec.deposit_depth)
+    total = flow + depo
+    used = np.flatnonzero((total > 0.0).any(axis=0))
+    ncell = min(total.shape[1], (used[-1] + 11) if used.size else total.shape[1])
+    flow, depo = flow[:, :ncell], depo[:, :ncell]
+    x_grid = (np.arange(ncell) + 0.5) * dxg
+    vol_flow = np.asarray([np.sum(v) for v in rec.volume])
+    vol_dep = np.asarray([np.sum(d) * dxg for d in rec.deposit_depth])
+    v0 = vol_flow[0]
+    t_c = characteristic_time(g.H0, cfg.theta)
+    tol = cfg.output.flow_time_tolerance
+    t_f = flow_time(time, front, tol) if rec.status == 1 else float("nan")
+    final = float(front[-1]) - g.L0 if front.size else float("nan")
+    if xinf is not None:
+        x_inf, mode, iters, resid = xinf.x_inf, xinf.mode, xinf.iterations, xinf.residual
+    else:
+        x_inf, mode, iters, resid = (float(front[-1]), "final front of this run (no deposition)", 0, 0.0)
+    ds = xr.Dataset(
+        data_vars={
+            "front_position": var(front, ("time",), "m", "front position from the back wall (x = 0)",
+                                  definition=FRONT_DEFINITION),
+            "runout": var(front - g.L0, ("time",), "m", "runout from the gate, x_front - L0"),
+            "flowing_volume": var(vol_flow, ("time",), "m2", "flowing volume per unit width"),
+            "deposited_volume": var(vol_dep, ("time",), "m2", "deposited volume per unit width"),
+            "flow_depth": var(flow, ("time", "x_grid"), "m", "flowing depth h (eq 20 on the grid)"),
+            "deposit_depth": var(depo, ("time", "x_grid"), "m", "deposited depth h_D"),
+            "x": var(np.asarray(rec.x), ("time", "particle"), "m", "particle position along the slope"),
+            "u": var(np.asarray(rec.u), ("time", "particle"), "m s-1", "particle depth-averaged velocity"),
+            "h": var(np.asarray(rec.h), ("time", "particle"), "m", "flowing depth at the particle (eq 20)"),
+            "volume": var(np.asarray(rec.volume), ("time", "particle"), "m2", "particle volume per unit width"),
+            "smoothing_length": var(np.asarray(rec.smoothing_length), ("time",), "m", "smoothing length L_s (eq 25)"),
+            "time_step": var(np.asarray(rec.time_step), ("time",), "s", "last time step before the output (eq 32)"),
+            "steps": var(np.asarray(rec.steps, dtype=np.int64), ("time",), "1", "time steps taken"),
+            "final_runout": var(final, (), "m", "final runout from the gate, x_front - L0"),
+            "final_runout_norm": var(final / g.L0, (), "1", "final runout / L0"),
+            "flow_time": var(t_f, (), "s", "time when the front comes to rest (granudep.front.flow_time)"),
+            "flow_time_norm": var(t_f / t_c, (), "1", "flow time / t_c, t_c = sqrt(H0/(g cos theta))"),
+            "volume_error": var(float(np.max(np.abs(vol_flow + vol_dep - v0)) / v0), (), "1",
+                                "max |flowing + deposited - initial| / initial volume"),
+        },
+        coords={
+            "time": var(time, ("time",), "s", "time since release"),
+            "particle": var(np.arange(np.asarray(rec.x).shape[1]), ("particle",), "1", "particle id"),
+            "x_grid": var(x_grid, ("x_grid",), "m", "cell centre along the slope from the back wall"),
+        },
+    )
+    if mode == "self-consistent":
+        ds["x_inf_history"] = var(np.asarray(xinf.history_x), ("x_inf_iteration",), "m", "x_inf tried")
+        ds["x_front_history"] = var(np.asarray(xinf.history_front), ("x_inf_iteration",), "m",
+                                    "final front of the run with that x_inf")
+        ds = ds.assign_coords(x_inf_iteration=var(np.arange(len(xinf.history_x)), ("x_inf_iteration",), "1",
+                                                  "x_inf iteration"))
+    num = cfg.numerics
+    ds.attrs.update({
+        "theta_deg": g.theta_deg, "L0": g.L0, "H0": g.H0, "a": g.H0 / g.L0, "deposition": int(deposition),
+        "front_depth_threshold": cfg.front_threshold, "flow_time_tolerance": tol,
+        "front_definition": FRONT_DEFINITION, "x_inf": float(x_inf), "x_inf_mode": mode,
+        "x_inf_iterations": int(iters), "x_inf_residual": float(resid),
+        "A": float(A), "B": float(B), "ab_source": ab_source,
+        "coefficient_units": cfg.deposition.coefficient_units, "p0": cfg.p0, "t_c": t_c,
+        "k_active": physics.k_active, "k_passive": physics.k_passive, "earth_pressure": num.earth_pressure,
+        "phi_internal_deg": cfg.material.phi_internal_deg, "phi_basal_deg": cfg.material.phi_basal_deg,
+        "d": cfg.material.d, "n_particles": num.n_particles, "smoothing_B": num.smoothing_B, "cfl": num.cfl,
+        "xsph_delta": num.xsph_delta, "kernel_support": num.kernel_support, "dx_grid": dxg,
+        "n_steps": int(rec.n_steps), "at_rest": int(rec.status == 1), "status": rec.message,
+    })
+    return provenance(ds, case=cfg.case, config_yaml=to_yaml(cfg))
+
+
+def default_path(cfg, deposition: bool) -> str:
+    return f"results/da/{cfg.case}_{'deposition' if deposition else 'nodeposition'}.nc"
+
+
+def summary_line(ds: xr.Dataset) -> str:
+    """The CLI's closing line: final runout and flow time with the front definition."""
+    tf = float(ds.flow_time)
+    tf_txt = f"{tf:.3f} s (t/t_c = {float(ds.flow_time_norm):.3f})" if math.isfinite(tf) else "n/a (not at rest)"
+    return (f"{ds.attrs['case']} ({'with' if ds.attrs['deposition'] else 'without'} deposition): "
+            f"final runout dL/L0 = {float(ds.final_runout_norm):.4f} (dL = {float(ds.final_runout):.4f} m), "
+            f"flow time {tf_txt}; front = last cell with h + h_D >= {ds.attrs['front_depth_threshold'] * 1e3:.2f} mm, "
+            f"rest = front moves < {ds.attrs['flow_time_tolerance'] * 1e3:.1f} mm")
