@@ -1,0 +1,273 @@
+"""Configuration of a 2D ISPH run: validated dataclasses built from a case name, YAML or dict.
+
+Sections (YAML keys): ``case``, ``geometry``, ``material``, ``rheology``, ``wall``, ``numerics``,
+``output``. Every field is range-checked by :func:`granudep.config.build`; cross-field checks are in
+``validate``. Overrides may name a field by its dotted key (``numerics.dx``) or, when unique, by its
+bare name (``dx``).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from ..cases import characteristic_time, check_case_name, material as table2_material, table1, table5
+from ..config import ConfigError, build, load_yaml, merge, param
+
+_GB = table2_material("glass_beads")
+
+
+@dataclass(frozen=True)
+class Geometry:
+    theta_deg: float = param(22.0, ge=0.0, lt=60.0, unit="deg", doc="slope angle")
+    L0: float = param(0.2, gt=0.0, le=5.0, unit="m", doc="column length (gate at x = L0)")
+    H0: float = param(0.14, gt=0.0, le=5.0, unit="m", doc="column height")
+    domain_length: float | None = param(None, gt=0.0, unit="m",
+                                        doc="bed length from the back wall; null = L0 + max(0.8 m, 8 H0)")
+    back_wall: bool = param(True, doc="rigid wall at x = 0 (column collapse); false for periodic layers")
+    periodic_length: float = param(0.0, ge=0.0, unit="m",
+                                   doc="> 0: periodic in x with this period (layer tests; no back wall)")
+
+    def validate(self, prefix: str) -> None:
+        p = f"{prefix}." if prefix else ""
+        if self.domain_length is not None and self.domain_length <= self.L0:
+            raise ConfigError(f"{p}domain_length: must be > L0 = {self.L0} (got {self.domain_length})")
+        if self.periodic_length > 0 and self.back_wall:
+            raise ConfigError(f"{p}back_wall: must be false when periodic_length > 0 (got true)")
+        if self.periodic_length > 0 and abs(self.periodic_length - self.L0) > 1e-12:
+            raise ConfigError(f"{p}periodic_length: must equal L0 = {self.L0} for a periodic layer "
+                              f"(got {self.periodic_length})")
+
+
+@dataclass(frozen=True)
+class Material:
+    d: float = param(_GB["d"], gt=0.0, lt=0.1, unit="m", doc="grain diameter (Table 2)")
+    rho_s: float = param(_GB["rho_s"], gt=0.0, unit="kg m-3", doc="grain density (Table 2)")
+    rho: float = param(_GB["rho"], gt=0.0, unit="kg m-3", doc="bulk density of the continuum (Table 2)")
+    phi_deg: float = param(_GB["phi_deg"], gt=0.0, lt=90.0, unit="deg",
+                           doc="internal friction angle; mu_s = tan(phi)")
+    mu_2: float = param(0.73, gt=0.0, unit="1", doc="limiting friction at large I (paper: 'mu_s ~ 0.73')")
+    I0: float = param(0.279, gt=0.0, unit="1", doc="inertial-number scale (Ionescu et al. 2015)")
+
+    @property
+    def mu_s(self) -> float:
+        return math.tan(math.radians(self.phi_deg))
+
+    def validate(self, prefix: str) -> None:
+        p = f"{prefix}." if prefix else ""
+        if self.mu_2 <= self.mu_s:
+            raise ConfigError(f"{p}mu_2: must be > mu_s = tan(phi_deg) = {self.mu_s:.4f} (got {self.mu_2})")
+        if self.rho > self.rho_s:
+            raise ConfigError(f"{p}rho: must be <= rho_s = {self.rho_s} (got {self.rho})")
+
+
+@dataclass(frozen=True)
+class Rheology:
+    model: str = param("mu_i", choices=("mu_i", "newtonian"), doc="mu(I) (eqs 4-5) or constant viscosity")
+    viscosity: float = param(1.0, gt=0.0, unit="Pa s", doc="Newtonian dynamic viscosity (model = newtonian)")
+    eta_max: float = param(5.0e3, gt=0.0, unit="Pa s",
+                           doc="viscosity cap of the regularised Drucker-Prager/mu(I) law (quasi-rigid state)")
+    pair_mean: str = param("arithmetic", choices=("harmonic", "geometric", "arithmetic"),
+                           doc="pair viscosity of the implicit viscous Laplacian")
+    eta_min: float = param(1.0e-3, ge=0.0, unit="Pa s", doc="viscosity floor (p -> 0 at the free surface)")
+
+    def validate(self, prefix: str) -> None:
+        p = f"{prefix}." if prefix else ""
+        if self.eta_min >= self.eta_max:
+            raise ConfigError(f"{p}eta_min: must be < eta_max = {self.eta_max} (got {self.eta_min})")
+
+
+@dataclass(frozen=True)
+class Wall:
+    slip: str = param("coulomb", choices=("no_slip", "navier", "free_slip", "coulomb"),
+                      doc="basal/back-wall condition for the viscous stress")
+    slip_length: float = param(0.0, ge=0.0, unit="m", doc="Navier slip length b (slip = navier)")
+    phi_wall_deg: float = param(_GB["phi_deg"], gt=0.0, lt=90.0, unit="deg",
+                                doc="Coulomb wall friction angle phi_B (slip = coulomb)")
+    stick_speed: float = param(1.0e-4, gt=0.0, unit="m s-1",
+                               doc="Coulomb regularisation: below this tangential speed the wall friction is a stiff drag")
+    layers: int = param(0, ge=0, le=8, doc="wall particle layers; 0 = enough to cover the kernel support 2h")
+
+
+@dataclass(frozen=True)
+class Numerics:
+    dx: float = param(0.004, gt=0.0, le=0.1, unit="m", doc="initial particle spacing")
+    h_factor: float = param(1.3, ge=1.0, le=2.0, unit="1", doc="smoothing length h = h_factor dx")
+    cfl: float = param(0.2, gt=0.0, le=0.5, unit="1", doc="dt <= cfl h / max|u|")
+    dt_max: float = param(2.0e-3, gt=0.0, unit="s", doc="upper bound of the time step")
+    t_end: float | None = param(None, gt=0.0, unit="s", doc="end time; null = 30 t_c (t_c = sqrt(H0/(g cos theta)))")
+    free_surface_threshold: float = param(1.6, gt=0.0, lt=2.0, unit="1",
+                                          doc="div r below this marks a free-surface particle (p = 0)")
+    shifting: float = param(2.0, ge=0.0, le=10.0, unit="1",
+                            doc="particle shifting coefficient A in D = A h |u| dt (0 = off)")
+    density_relaxation: float = param(0.02, ge=0.0, le=1.0, unit="1",
+                                      doc="weight of the density-invariant source (1 - C_i/C0)/dt^2 in the PPE")
+    free_surface_pressure: str = param("half_layer", choices=("half_layer", "zero"),
+                                       doc="Dirichlet value on free-surface particles: rho g cos(theta) dx/2 or 0")
+    kernel_completion: bool = param(True, doc="PPE: missing neighbours next to the free surface count as p = 0")
+    pressure_solver: str = param("direct", choices=("direct", "cg"),
+                                 doc="PPE: SuperLU factorisation or Jacobi-preconditioned CG (warm start)")
+    max_steps: int = param(2_000_000, gt=0, doc="hard cap on the number of time steps")
+
+
+@dataclass(frozen=True)
+class Output:
+    interval: float = param(0.01, gt=0.0, unit="s", doc="snapshot interval")
+    front_depth_threshold: float | None = param(None, gt=0.0, unit="m",
+                                                doc="front: first cell thinner than this; null = 2 d")
+    rest_speed: float = param(0.01, gt=0.0, unit="m s-1", doc="at rest when max particle speed < rest_speed ...")
+    rest_duration: float = param(0.1, gt=0.0, unit="s", doc="... for this long")
+    stop_at_rest: bool = param(True, doc="end the run once at rest")
+    progress_s: float = param(5.0, gt=0.0, unit="s", doc="wall seconds between progress lines")
+
+
+@dataclass(frozen=True)
+class IsphConfig:
+    case: str = param("user", doc="case name (output file name)")
+    geometry: Geometry = field(default_factory=Geometry)
+    material: Material = field(default_factory=Material)
+    rheology: Rheology = field(default_factory=Rheology)
+    wall: Wall = field(default_factory=Wall)
+    numerics: Numerics = field(default_factory=Numerics)
+    output: Output = field(default_factory=Output)
+
+    def validate(self, prefix: str) -> None:
+        check_case_name(self.case)
+        g, n = self.geometry, self.numerics
+        if g.L0 < 2 * n.dx or g.H0 < 2 * n.dx:
+            raise ConfigError(f"numerics.dx: must be <= min(L0, H0)/2 = {min(g.L0, g.H0) / 2} (got {n.dx})")
+        npart = (g.L0 / n.dx) * (g.H0 / n.dx)
+        if npart > 400_000:
+            raise ConfigError(f"numerics.dx: gives {npart:.0f} particles (> 400000); must be >= "
+                              f"{math.sqrt(g.L0 * g.H0 / 400_000):.4g}")
+        if g.periodic_length > 0 and g.periodic_length < 3 * 2 * n.h_factor * n.dx:
+            raise ConfigError(f"geometry.periodic_length: must be >= 6 h = {6 * n.h_factor * n.dx:.4g} "
+                              f"(got {g.periodic_length})")
+
+    # derived quantities ------------------------------------------------------------------
+    @property
+    def theta(self) -> float:
+        return math.radians(self.geometry.theta_deg)
+
+    @property
+    def h(self) -> float:
+        return self.numerics.h_factor * self.numerics.dx
+
+    @property
+    def t_c(self) -> float:
+        return characteristic_time(self.geometry.H0, self.theta)
+
+    @property
+    def t_end(self) -> float:
+        return self.numerics.t_end if self.numerics.t_end is not None else 30.0 * self.t_c
+
+    @property
+    def domain_length(self) -> float:
+        g = self.geometry
+        if g.periodic_length > 0:
+            return g.periodic_length
+        return g.domain_length if g.domain_length is not None else g.L0 + max(0.8, 8.0 * g.H0)
+
+    @property
+    def front_depth_threshold(self) -> float:
+        t = self.output.front_depth_threshold
+        return t if t is not None else 2.0 * self.material.d
+
+    @property
+    def wall_friction(self) -> float:
+        return math.tan(math.radians(self.wall.phi_wall_deg))
+
+    @property
+    def wall_layers(self) -> int:
+        if self.wall.layers:
+            return self.wall.layers
+        return int(math.ceil(2.0 * self.numerics.h_factor))
+
+
+# --- named cases -------------------------------------------------------------------------------
+EXTRA_CASES = {"T22-A30": "1D-A30", "T22-A45": "1D-A45", "T22-A124": "1D-A124"}
+
+
+def case_names() -> list[str]:
+    return list(table1().case_id) + list(EXTRA_CASES)
+
+
+def case_geometry(name: str) -> dict:
+    """theta_deg, L0, H0 of a named case (Table 1, or a Table 5 geometry at 22 deg).
+
+    Table 5 rounds H0 (1D-A45: 0.113 m); we use H0 = a L0 (0.1125 m), the contract's value.
+    """
+    t1 = table1()
+    row = t1[t1.case_id == name]
+    if not row.empty:
+        r = row.iloc[0]
+        return {"theta_deg": float(r.theta_deg), "L0": float(r.L0_m), "H0": float(r.H0_m)}
+    if name in EXTRA_CASES:
+        t5 = table5()
+        r = t5[t5.case_id == EXTRA_CASES[name]].iloc[0]
+        return {"theta_deg": float(r.theta_deg), "L0": float(r.L0_m), "H0": round(float(r.a) * float(r.L0_m), 6)}
+    raise ConfigError(f"case: unknown case {name!r} (allowed: {', '.join(case_names())}, or a YAML file)")
+
+
+def _field_index() -> dict[str, list[str]]:
+    idx: dict[str, list[str]] = {}
+    for sec in dataclasses.fields(IsphConfig):
+        tp = {"geometry": Geometry, "material": Material, "rheology": Rheology, "wall": Wall,
+              "numerics": Numerics, "output": Output}.get(sec.name)
+        if tp is None:
+            idx.setdefault(sec.name, []).append(sec.name)
+            continue
+        for f in dataclasses.fields(tp):
+            idx.setdefault(f.name, []).append(f"{sec.name}.{f.name}")
+    return idx
+
+
+def _apply_overrides(data: dict, overrides: Mapping[str, Any]) -> dict:
+    idx = _field_index()
+    out = dict(data)
+    for key, value in overrides.items():
+        if value is None:
+            continue
+        dotted = key if "." in key else None
+        if dotted is None:
+            where = idx.get(key)
+            if not where:
+                raise ConfigError(f"{key}: unknown override (allowed: {', '.join(sorted(idx))} or section.key)")
+            if len(where) > 1:
+                raise ConfigError(f"{key}: ambiguous override (use one of {', '.join(where)})")
+            dotted = where[0]
+        parts = dotted.split(".")
+        node = out
+        for p in parts[:-1]:
+            node[p] = dict(node.get(p) or {})
+            node = node[p]
+        node[parts[-1]] = value
+    return out
+
+
+def load_config(case_or_config: Any, **overrides) -> IsphConfig:
+    """Case name, YAML path, mapping or IsphConfig (+ overrides) -> validated IsphConfig."""
+    if isinstance(case_or_config, IsphConfig):
+        data = _asdict(case_or_config)
+    elif isinstance(case_or_config, Mapping):
+        data = dict(case_or_config)
+    elif isinstance(case_or_config, (str, Path)) and (str(case_or_config).endswith((".yaml", ".yml"))
+                                                      or Path(str(case_or_config)).is_file()):
+        data = load_yaml(case_or_config)
+        data.setdefault("case", Path(str(case_or_config)).stem)
+    elif isinstance(case_or_config, str):
+        data = {"case": case_or_config, "geometry": case_geometry(case_or_config)}
+    else:
+        raise ConfigError(f"case: must be a case name, YAML path or mapping (got {case_or_config!r})")
+    if isinstance(data.get("case"), str) and data["case"] in case_names() and not isinstance(case_or_config, IsphConfig):
+        # a YAML naming a paper case inherits its geometry unless it sets one
+        data = merge({"geometry": case_geometry(data["case"])}, data)
+    data = _apply_overrides(data, overrides)
+    return build(IsphConfig, data)
+
+
+def _asdict(cfg) -> dict:
+    from ..config import to_dict
+    return to_dict(cfg)

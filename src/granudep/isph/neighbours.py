@@ -1,0 +1,135 @@
+"""Cell-linked neighbour search (numba): a flat per-particle neighbour list rebuilt each step.
+
+Rows are the fluid (granular) particles 0..nf-1; neighbours are any particle (fluid or wall)
+within ``radius`` (= 2h, the Wendland C2 support). The list is CSR-like: the neighbours of fluid
+particle i are ``nbr[start[i]:start[i+1]]`` with pair vectors ``rx = x_i - x_j``, ``ry`` and
+distance ``r``. With ``period > 0`` the domain is periodic in x on [0, period) (minimum image).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def _cells(x, y, cell, period, xmin, ymin, ncx, ncy):
+    n = x.size
+    cid = np.empty(n, np.int64)
+    for k in range(n):
+        cx = int((x[k] - xmin) / cell)
+        if period > 0.0:
+            cx = cx % ncx
+        else:
+            cx = min(max(cx, 0), ncx - 1)
+        cy = min(max(int((y[k] - ymin) / cell), 0), ncy - 1)
+        cid[k] = cx * ncy + cy
+    counts = np.zeros(ncx * ncy + 1, np.int64)
+    for k in range(n):
+        counts[cid[k] + 1] += 1
+    for c in range(ncx * ncy):
+        counts[c + 1] += counts[c]
+    order = np.empty(n, np.int64)
+    fill = counts[:-1].copy()
+    for k in range(n):
+        order[fill[cid[k]]] = k
+        fill[cid[k]] += 1
+    return cid, counts, order
+
+
+@njit(cache=True)
+def build_neighbours(x, y, nf, radius, period):
+    """Neighbours within ``radius`` of each of the first ``nf`` particles (self excluded).
+
+    Returns start (nf+1), nbr, rx, ry, r.
+    """
+    n = x.size
+    if period > 0.0:
+        xmin = 0.0
+        ncx = max(int(period / radius), 1)
+        cell_x = period / ncx
+    else:
+        xmin = x.min() - 1e-9
+        cell_x = radius
+        ncx = int((x.max() - xmin) / cell_x) + 1
+    ymin = y.min() - 1e-9
+    # cells are square with side >= radius; with periodicity the x side is period/ncx >= radius
+    cell = cell_x
+    ncy = int((y.max() - ymin) / cell) + 1
+    cid, counts, order = _cells(x, y, cell, period, xmin, ymin, ncx, ncy)
+    r2max = radius * radius
+    half = 0.5 * period
+    # pass 1: count
+    start = np.zeros(nf + 1, np.int64)
+    for i in range(nf):
+        ci = cid[i] // ncy
+        cj = cid[i] % ncy
+        cnt = 0
+        for dxc in range(-1, 2):
+            cx = ci + dxc
+            if period > 0.0:
+                if ncx < 3 and dxc != 0 and (ncx == 1 or dxc == 1):
+                    continue  # avoid visiting the same column twice
+                cx = cx % ncx
+            elif cx < 0 or cx >= ncx:
+                continue
+            for dyc in range(-1, 2):
+                cy = cj + dyc
+                if cy < 0 or cy >= ncy:
+                    continue
+                c = cx * ncy + cy
+                for s in range(counts[c], counts[c + 1]):
+                    j = order[s]
+                    if j == i:
+                        continue
+                    ddx = x[i] - x[j]
+                    if period > 0.0:
+                        if ddx > half:
+                            ddx -= period
+                        elif ddx < -half:
+                            ddx += period
+                    ddy = y[i] - y[j]
+                    if ddx * ddx + ddy * ddy < r2max:
+                        cnt += 1
+        start[i + 1] = start[i] + cnt
+    m = start[nf]
+    nbr = np.empty(m, np.int64)
+    rx = np.empty(m)
+    ry = np.empty(m)
+    rr = np.empty(m)
+    # pass 2: fill
+    for i in range(nf):
+        ci = cid[i] // ncy
+        cj = cid[i] % ncy
+        k = start[i]
+        for dxc in range(-1, 2):
+            cx = ci + dxc
+            if period > 0.0:
+                if ncx < 3 and dxc != 0 and (ncx == 1 or dxc == 1):
+                    continue
+                cx = cx % ncx
+            elif cx < 0 or cx >= ncx:
+                continue
+            for dyc in range(-1, 2):
+                cy = cj + dyc
+                if cy < 0 or cy >= ncy:
+                    continue
+                c = cx * ncy + cy
+                for s in range(counts[c], counts[c + 1]):
+                    j = order[s]
+                    if j == i:
+                        continue
+                    ddx = x[i] - x[j]
+                    if period > 0.0:
+                        if ddx > half:
+                            ddx -= period
+                        elif ddx < -half:
+                            ddx += period
+                    ddy = y[i] - y[j]
+                    d2 = ddx * ddx + ddy * ddy
+                    if d2 < r2max:
+                        nbr[k] = j
+                        rx[k] = ddx
+                        ry[k] = ddy
+                        rr[k] = np.sqrt(d2)
+                        k += 1
+    return start, nbr, rx, ry, rr

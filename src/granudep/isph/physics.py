@@ -1,0 +1,427 @@
+"""Per-particle physics of the projection ISPH scheme (numba kernels; no Python loops).
+
+All loops run over the fluid (granular) particles i = 0..nf-1 and their neighbour list
+(:mod:`granudep.isph.neighbours`); wall particles are j >= nf. Pair vector r_ij = x_i - x_j,
+∇_i W_ij = (dW/dr / r) r_ij with the shared 2D Wendland C2 kernel (support 2h). Every particle has
+volume V = dx² (incompressible continuum).
+
+Walls are layers of fixed particles. Each wall particle carries the plane of its wall surface
+(unit normal n into the fluid, offset c: n·x = c on the surface). Per fluid–wall pair:
+
+* pressure (mirror/Neumann): p_w = p_i − G_i (n·r_iw), G_i = (ρ/Δt) min(u*_i·n, 0): the wall
+  supports the normal momentum the predictor pushes into it and never pulls (separation allowed);
+* velocity (viscous stress and strain rate): the tangential wall velocity is extrapolated
+  u_w,t = (1 − β) u_i,t with Morris et al. (1997) β = min(1.5, (d_i + d_w)/(d_i + b)); b is the
+  Navier slip length (0: no slip); free slip: β = 0. No-slip/Navier wall terms are divided by the
+  lattice constant ``wall_ns`` (0.71 for h = 1.3 dx) so that a linear shear profile feels the wall
+  stress η du/dy. Coulomb (default): no viscous wall term (β = 0); the wall friction μ_B p_w is a
+  contact drag on the first particle layer (:func:`coulomb_wall_drag`).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..kernels import wendland_dwdr, wendland_w
+
+SLIP_NO, SLIP_NAVIER, SLIP_FREE, SLIP_COULOMB = 0, 1, 2, 3
+SLIP_CODES = {"no_slip": SLIP_NO, "navier": SLIP_NAVIER, "free_slip": SLIP_FREE, "coulomb": SLIP_COULOMB}
+
+
+@njit(cache=True, inline="always")
+def _gw(r, h):
+    """(dW/dr)/r, so that ∇_i W_ij = _gw * r_ij (finite at r -> 0)."""
+    if r < 1e-12 * h:
+        return 0.0
+    return wendland_dwdr(r, h) / r
+
+
+@njit(cache=True, inline="always")
+def wall_beta(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
+    """Morris wall-velocity factor β (u_i − u_w = β u_i for the tangential component)."""
+    if slip == SLIP_FREE:
+        return 0.0
+    di = max(nx * xi + ny * yi - c, 0.25 * dx)
+    dw = max(c - (nx * xw + ny * yw), 0.0)
+    b = slip_length if slip == SLIP_NAVIER else 0.0
+    return min(1.5, (di + dw) / (di + b))
+
+
+MEAN_HARMONIC, MEAN_GEOMETRIC, MEAN_ARITHMETIC = 0, 1, 2
+MEAN_CODES = {"harmonic": MEAN_HARMONIC, "geometric": MEAN_GEOMETRIC, "arithmetic": MEAN_ARITHMETIC}
+
+
+@njit(cache=True, inline="always")
+def pair_viscosity(ei, ej, mean):
+    """Pair viscosity η̄_ij of the variable-viscosity Laplacian."""
+    if mean == MEAN_HARMONIC:
+        return 2.0 * ei * ej / (ei + ej + 1e-300)
+    if mean == MEAN_GEOMETRIC:
+        return math.sqrt(ei * ej)
+    return 0.5 * (ei + ej)
+
+
+@njit(cache=True)
+def geometry_terms(start, nbr, rx, ry, rr, nf, h, vol):
+    """∇·r (free-surface detector, Lee et al. 2008), concentration C = Σ V W (self included),
+    ∇C (shifting, normals) and the inverse renormalisation matrix L (Bonet & Lok 1999)."""
+    divr = np.zeros(nf)
+    conc = np.zeros(nf)
+    gcx = np.zeros(nf)
+    gcy = np.zeros(nf)
+    lmat = np.zeros((nf, 4))
+    w0 = wendland_w(0.0, h)
+    for i in range(nf):
+        s_div = 0.0
+        s_c = vol * w0
+        sx = 0.0
+        sy = 0.0
+        mxx = 0.0
+        mxy = 0.0
+        myy = 0.0
+        for k in range(start[i], start[i + 1]):
+            r = rr[k]
+            g = _gw(r, h)
+            s_div -= vol * g * r * r
+            s_c += vol * wendland_w(r, h)
+            sx += vol * g * rx[k]
+            sy += vol * g * ry[k]
+            # M_ab = Σ V (x_j - x_i)_a ∇_b W = -Σ V g r_a r_b
+            mxx -= vol * g * rx[k] * rx[k]
+            mxy -= vol * g * rx[k] * ry[k]
+            myy -= vol * g * ry[k] * ry[k]
+        divr[i] = s_div
+        conc[i] = s_c
+        gcx[i] = sx
+        gcy[i] = sy
+        det = mxx * myy - mxy * mxy
+        if det > 0.1 and mxx > 0.0 and myy > 0.0:
+            lmat[i, 0] = myy / det
+            lmat[i, 1] = -mxy / det
+            lmat[i, 2] = -mxy / det
+            lmat[i, 3] = mxx / det
+        else:
+            lmat[i, 0] = 1.0
+            lmat[i, 3] = 1.0
+    return divr, conc, gcx, gcy, lmat
+
+
+@njit(cache=True)
+def velocity_gradient(start, nbr, rx, ry, rr, nf, h, vol, x, y, u, v, lmat, p, eta,
+                      wnx, wny, wc, slip, slip_length, mu_wall, dx, gx, gy, rho, eta_max, wall_ns, wall_k):
+    """Renormalised ∇u (rows: du/dx, du/dy, dv/dx, dv/dy); wall neighbours carry the extrapolated
+    wall velocity (normal component = u_i's, tangential (1 − βφ) u_i,t)."""
+    grad = np.zeros((nf, 4))
+    for i in range(nf):
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        a3 = 0.0
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            g = _gw(rr[k], h)
+            if j < nf:
+                du = u[j] - u[i]
+                dv = v[j] - v[i]
+            else:
+                w = j - nf
+                nx = wnx[w]
+                ny = wny[w]
+                beta = wall_beta(x[i], y[i], nx, ny, wc[w], x[j], y[j], slip, slip_length, dx)
+                if slip == SLIP_COULOMB:
+                    beta = 0.0  # the granular particle slides on the wall; friction is a contact force
+                un = u[i] * nx + v[i] * ny
+                # u_w - u_i = -β u_t
+                du = -beta * (u[i] - un * nx)
+                dv = -beta * (v[i] - un * ny)
+            gx = vol * g * rx[k]
+            gy = vol * g * ry[k]
+            a0 += du * gx
+            a1 += du * gy
+            a2 += dv * gx
+            a3 += dv * gy
+        l0 = lmat[i, 0]
+        l1 = lmat[i, 1]
+        l2 = lmat[i, 2]
+        l3 = lmat[i, 3]
+        # corrected gradient row vector: g_corr = L g  (L symmetric)
+        grad[i, 0] = l0 * a0 + l1 * a1
+        grad[i, 1] = l2 * a0 + l3 * a1
+        grad[i, 2] = l0 * a2 + l1 * a3
+        grad[i, 3] = l2 * a2 + l3 * a3
+    return grad
+
+
+@njit(cache=True)
+def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
+    """η = μ(I) p / |γ̇| capped to [eta_min, eta_max] (eqs 4–5); returns η and |γ̇|.
+
+    |γ̇| = sqrt(2 D:D) with D = (∇u + ∇uᵀ)/2, i.e. sqrt(½ γ̇_ij γ̇_ij) with γ̇ = 2D: equals |du/dy|
+    in simple shear (Jop et al. 2006). p is clipped at 0; I = |γ̇| d / sqrt(p/ρ_s).
+    """
+    n = p.size
+    eta = np.empty(n)
+    gdot = np.empty(n)
+    for i in range(n):
+        dxx = grad[i, 0]
+        dyy = grad[i, 3]
+        dxy = 0.5 * (grad[i, 1] + grad[i, 2])
+        gd = math.sqrt(2.0 * (dxx * dxx + dyy * dyy + 2.0 * dxy * dxy))
+        gdot[i] = gd
+        pi = max(p[i], 0.0)
+        if pi <= 0.0:
+            e = eta_min
+        elif gd * eta_max <= mu_s * pi:
+            e = eta_max  # below yield even at I = 0: quasi-rigid
+        else:
+            inertial = gd * d / math.sqrt(pi / rho_s)
+            mu = mu_s + (mu_2 - mu_s) * inertial / (i0 + inertial)
+            e = mu * pi / gd
+        eta[i] = min(max(e, eta_min), eta_max)
+    return eta, gdot
+
+
+@njit(cache=True)
+def assemble_viscous(start, nbr, rx, ry, rr, nf, h, vol, x, y, u, v, p, eta, wnx, wny, wc,
+                     slip, slip_length, mu_wall, dx, dt, rho, eps2, mean, gx, gy, eta_max, lap_norm, wall_ns,
+                     wall_k):
+    """Implicit viscous matrices A = I − Δt/ρ ∇·(η∇·) (Morris Laplacian, harmonic-mean η) as CSR.
+
+    Row i: (1 + Δt/ρ Σ_j c_ij + wall_i) u_i − Δt/ρ Σ_j c_ij u_j,
+    c_ij = 2 η̄_ij V F_ij, F_ij = −r dW/dr/(r² + ε²) ≥ 0, η̄ = 2 η_i η_j/(η_i + η_j). Symmetric.
+    The wall term acts on the tangential component only (the normal one is the pressure's job):
+    wall_i = Δt/ρ Σ_w 2 η_i V F_iw β φ t_a², t = wall tangent, a = x (u matrix) or y (v matrix).
+    Returns indptr, indices, data (diagonal first in each row, u matrix) and diag_v (v matrix).
+    """
+    indptr = np.zeros(nf + 1, np.int64)
+    for i in range(nf):
+        cnt = 1
+        for k in range(start[i], start[i + 1]):
+            if nbr[k] < nf:
+                cnt += 1
+        indptr[i + 1] = indptr[i] + cnt
+    nnz = indptr[nf]
+    indices = np.empty(nnz, np.int64)
+    data = np.empty(nnz)
+    diag_v = np.empty(nf)
+    fac = dt / rho
+    for i in range(nf):
+        pos = indptr[i]
+        dpos = pos
+        indices[pos] = i
+        pos += 1
+        diag = 1.0
+        wu = 0.0
+        wv = 0.0
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            r = rr[k]
+            f = -_gw(r, h) * r * r / (r * r + eps2) / lap_norm
+            if j < nf:
+                ebar = pair_viscosity(eta[i], eta[j], mean)
+                cij = fac * 2.0 * ebar * vol * f
+                indices[pos] = j
+                data[pos] = -cij
+                pos += 1
+                diag += cij
+            else:
+                w = j - nf
+                beta = wall_beta(x[i], y[i], wnx[w], wny[w], wc[w], x[j], y[j], slip, slip_length, dx)
+                if slip == SLIP_COULOMB:
+                    continue  # friction enters through coulomb_wall_drag
+                cw = fac * 2.0 * eta[i] / wall_ns * vol * f * lap_norm * beta
+                # tangent t = (-n_y, n_x)
+                wu += cw * wny[w] * wny[w]
+                wv += cw * wnx[w] * wnx[w]
+        data[dpos] = diag + wu
+        diag_v[i] = diag + wv
+    return indptr, indices, data, diag_v
+
+
+@njit(cache=True)
+def coulomb_wall_drag(nf, x, y, u, v, p, planes, mu_wall, gx, gy, rho, dx, dt, u_eps, diag_u, diag_v):
+    """Coulomb wall friction as an implicit drag on the particles touching a wall (slip = coulomb).
+
+    For each wall plane (n, c) and particle at distance d = n·x − c < 1.5 dx (weight w = 1 up to
+    d = dx, then linearly to 0 at 1.5 dx: the first particle layer, also when it hovers), the
+    traction μ_B p_w on the particle's bed area dx, p_w = max(p_i, 0) + ρ max(−g·n, 0) d (pressure
+    extrapolated to the wall), gives the acceleration −μ_B p_w/(ρ dx) u_t/|u_t|, regularised as the
+    drag k u_t with k = w μ_B p_w/(ρ dx max(|u_t|, u_eps)) and added implicitly to the diagonal
+    (tangential component only). Sticks when |u_t| < u_eps (static friction up to μ_B p_w).
+    """
+    for i in range(nf):
+        for q in range(planes.shape[0]):
+            nx = planes[q, 0]
+            ny = planes[q, 1]
+            d = nx * x[i] + ny * y[i] - planes[q, 2]
+            if d >= 1.5 * dx:
+                continue
+            w = min(1.0, (1.5 * dx - d) / (0.5 * dx))
+            pw = max(p[i], 0.0) + rho * max(-(gx * nx + gy * ny), 0.0) * max(d, 0.0)
+            un = u[i] * nx + v[i] * ny
+            utx = u[i] - un * nx
+            uty = v[i] - un * ny
+            ut = math.sqrt(utx * utx + uty * uty)
+            k = w * mu_wall * pw / (rho * dx * max(ut, u_eps))
+            # tangent t = (-n_y, n_x)
+            diag_u[i] += dt * k * ny * ny
+            diag_v[i] += dt * k * nx * nx
+
+
+@njit(cache=True)
+def divergence(start, nbr, rx, ry, rr, nf, h, vol, u, v):
+    """∇·u_i = Σ_j V (u_j − u_i)·∇_i W_ij over granular neighbours (walls enter through the
+    pressure Neumann condition, not here)."""
+    div = np.zeros(nf)
+    for i in range(nf):
+        s = 0.0
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            if j < nf:
+                g = _gw(rr[k], h)
+                s += vol * g * ((u[j] - u[i]) * rx[k] + (v[j] - v[i]) * ry[k])
+        div[i] = s
+    return div
+
+
+@njit(cache=True)
+def assemble_ppe(start, nbr, rx, ry, rr, nf, h, vol, unknown, n_unknown, p_dir, div, us, vs, conc, c0,
+                 relax, wnx, wny, dt, rho, eps2, a_full, lap_norm):
+    """PPE Σ_j a_ij (p_i − p_j) = −(ρ/Δt) ∇·u* − γ ρ/Δt² min(1 − C_i/C0, 0) over the unknown
+    (non-free-surface) particles; a_ij = 2 V F_ij (Cummins & Rudman 1999 Laplacian). Free-surface
+    neighbours have their Dirichlet value ``p_dir``; wall neighbours use the mirror pressure (Neumann), which moves to the RHS.
+    Kernel completion: where the support is truncated (next to the free surface) the missing
+    neighbours are taken at p = 0, i.e. diag += max(a_full − Σ_j a_ij, 0) with a_full the
+    full-lattice sum (``a_full`` <= 0 switches this off).
+    Symmetric positive definite whenever every cluster touches a free surface."""
+    indptr = np.zeros(n_unknown + 1, np.int64)
+    for i in range(nf):
+        row = unknown[i]
+        if row < 0:
+            continue
+        cnt = 1
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            if j < nf and unknown[j] >= 0:
+                cnt += 1
+        indptr[row + 1] = cnt
+    for r in range(n_unknown):
+        indptr[r + 1] += indptr[r]
+    nnz = indptr[n_unknown]
+    indices = np.empty(nnz, np.int64)
+    data = np.empty(nnz)
+    rhs = np.zeros(n_unknown)
+    for i in range(nf):
+        row = unknown[i]
+        if row < 0:
+            continue
+        pos = indptr[row]
+        dpos = pos
+        indices[pos] = row
+        pos += 1
+        diag = 0.0
+        asum = 0.0
+        b = -rho / dt * div[i] - relax * rho / (dt * dt) * min(1.0 - conc[i] / c0, 0.0)
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            r = rr[k]
+            a = 2.0 * vol * (-_gw(r, h)) * r * r / (r * r + eps2) / lap_norm
+            asum += a
+            if j < nf:
+                diag += a
+                if unknown[j] >= 0:
+                    indices[pos] = unknown[j]
+                    data[pos] = -a
+                    pos += 1
+                else:
+                    b += a * p_dir[j]
+            else:
+                w = j - nf
+                nx = wnx[w]
+                ny = wny[w]
+                gn = rho / dt * min(us[i] * nx + vs[i] * ny, 0.0)
+                # p_i - p_w = G (n·r_iw)
+                b -= a * gn * (nx * rx[k] + ny * ry[k])
+        if a_full > 0.0:
+            diag += max(a_full - asum, 0.0)
+        data[dpos] = diag
+        rhs[row] = b
+    return indptr, indices, data, rhs
+
+
+@njit(cache=True)
+def pressure_gradient(start, nbr, rx, ry, rr, nf, h, vol, p, us, vs, lmat, wnx, wny, dt, rho):
+    """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure."""
+    gpx = np.zeros(nf)
+    gpy = np.zeros(nf)
+    for i in range(nf):
+        ax = 0.0
+        ay = 0.0
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            g = _gw(rr[k], h)
+            if j < nf:
+                dp = p[j] - p[i]
+            else:
+                w = j - nf
+                nx = wnx[w]
+                ny = wny[w]
+                gn = rho / dt * min(us[i] * nx + vs[i] * ny, 0.0)
+                dp = -gn * (nx * rx[k] + ny * ry[k])
+            ax += vol * dp * g * rx[k]
+            ay += vol * dp * g * ry[k]
+        gpx[i] = lmat[i, 0] * ax + lmat[i, 1] * ay
+        gpy[i] = lmat[i, 2] * ax + lmat[i, 3] * ay
+    return gpx, gpy
+
+
+@njit(cache=True)
+def wall_pressure_at_base(start, nbr, rx, ry, rr, nf, p, us, vs, wnx, wny, dt, rho):
+    """Mean mirror pressure of the wall particles seen by each fluid particle (diagnostic)."""
+    out = np.full(nf, np.nan)
+    for i in range(nf):
+        s = 0.0
+        c = 0
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            if j >= nf:
+                w = j - nf
+                gn = rho / dt * min(us[i] * wnx[w] + vs[i] * wny[w], 0.0)
+                s += p[i] - gn * (wnx[w] * rx[k] + wny[w] * ry[k])
+                c += 1
+        if c > 0:
+            out[i] = s / c
+    return out
+
+
+@njit(cache=True)
+def shifting(nf, gcx, gcy, u, v, fs, h, dt, coeff, dx):
+    """Fickian particle shifting δr = −A h |u| Δt ∇C (Skillen et al. 2013; Lind et al. 2012);
+    free-surface particles keep only the tangential part; |δr| <= 0.1 dx. Zero at rest."""
+    sx = np.zeros(nf)
+    sy = np.zeros(nf)
+    if coeff <= 0.0:
+        return sx, sy
+    for i in range(nf):
+        speed = math.sqrt(u[i] * u[i] + v[i] * v[i])
+        dcoef = coeff * h * speed * dt
+        ax = -dcoef * gcx[i]
+        ay = -dcoef * gcy[i]
+        if fs[i]:
+            gn = math.sqrt(gcx[i] * gcx[i] + gcy[i] * gcy[i])
+            if gn > 0.0:
+                nx = gcx[i] / gn
+                ny = gcy[i] / gn
+                dn = ax * nx + ay * ny
+                ax -= dn * nx
+                ay -= dn * ny
+        mag = math.sqrt(ax * ax + ay * ay)
+        lim = 0.1 * dx
+        if mag > lim:
+            ax *= lim / mag
+            ay *= lim / mag
+        sx[i] = ax
+        sy[i] = ay
+    return sx, sy

@@ -1,0 +1,347 @@
+"""Projection ISPH driver: owns the particle state, the time loop, the linear solves and output.
+
+One step (Cummins & Rudman 1999; Shao & Lo 2003; Lind et al. 2012), all per-particle work in the
+numba kernels of :mod:`granudep.isph.physics`:
+
+1. neighbour list (cell-linked, rebuilt every step), ∇·r, concentration, renormalisation;
+   free-surface particles: ∇·r < ``free_surface_threshold``;
+2. rheology from uⁿ, pⁿ: η = μ(I) p/|γ̇| capped at η_max (or Newtonian η);
+3. predictor, implicit in the viscous stress: (I − Δt/ρ ∇·η∇) u* = uⁿ + Δt g (one sparse matrix,
+   two right-hand sides), g = (g sin θ, −g cos θ);
+4. PPE Σ a_ij (p_i − p_j) = −ρ/Δt ∇·u* (+ density-invariant source), p = 0 on the free surface,
+   mirror-pressure Neumann condition on walls;
+5. corrector uⁿ⁺¹ = u* − Δt/ρ ∇p; positions xⁿ⁺¹ = xⁿ + Δt uⁿ⁺¹ + δr (particle shifting).
+"""
+from __future__ import annotations
+
+import math
+import time as _time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..cases import G
+from ..front import front_from_profile
+from ..progress import LOG, Progress
+from . import physics as ph
+from .config import IsphConfig
+from .neighbours import build_neighbours
+from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
+                    reference_laplacian_sum)
+
+
+class IsphBlowUp(RuntimeError):
+    """A run that produced NaN or lost a particle; ``dataset`` holds the snapshots so far."""
+
+    def __init__(self, message: str, dataset=None):
+        super().__init__(message)
+        self.dataset = dataset
+
+
+@dataclass
+class Snapshots:
+    time: list = field(default_factory=list)
+    fields: dict = field(default_factory=lambda: {k: [] for k in
+                                                  ("x", "y", "u", "v", "pressure", "viscosity", "free_surface")})
+    front: list = field(default_factory=list)
+    kinetic: list = field(default_factory=list)
+    max_speed: list = field(default_factory=list)
+    steps: list = field(default_factory=list)
+
+
+@dataclass
+class SolverStats:
+    steps: int = 0
+    wall_s: float = 0.0
+    t_neigh: float = 0.0
+    t_kern: float = 0.0
+    t_visc: float = 0.0
+    t_ppe: float = 0.0
+    ppe_iters: int = 0
+
+
+def _solve_direct(indptr, indices, data, rhss):
+    n = indptr.size - 1
+    # symmetric matrices: the CSR arrays are also the CSC arrays
+    # SuperLU needs sorted row indices (the kernels put the diagonal first); sorted_indices()
+    # works on a copy so the caller's arrays stay in kernel order
+    a = sp.csc_matrix((data, indices, indptr), shape=(n, n)).sorted_indices()
+    lu = spla.splu(a, permc_spec="MMD_AT_PLUS_A")
+    return [lu.solve(b) for b in rhss]
+
+
+class IsphSolver:
+    """State + stepping for one configuration."""
+
+    def __init__(self, cfg: IsphConfig, particles: Particles | None = None):
+        self.cfg = cfg
+        c = cfg
+        self.parts = particles if particles is not None else build_particles(cfg)
+        P = self.parts
+        self.nf = P.nf
+        self.x = P.x.copy()
+        self.y = P.y.copy()
+        nf = self.nf
+        self.u = np.zeros(nf)
+        self.v = np.zeros(nf)
+        th = c.theta
+        self.gx = G * math.sin(th)
+        self.gy = -G * math.cos(th)
+        self.rho = c.material.rho
+        self.dx = c.numerics.dx
+        self.h = c.h
+        self.vol = self.dx * self.dx
+        self.eps2 = 0.01 * self.h * self.h
+        self.radius = 2.0 * self.h
+        self.period = c.geometry.periodic_length
+        # lithostatic initial pressure (used by the rheology of the first step only)
+        self.p = np.maximum(self.rho * G * math.cos(th) * (c.geometry.H0 - self.y[:nf]), 0.0)
+        self.eta = np.full(nf, c.rheology.eta_max if c.rheology.model == "mu_i" else c.rheology.viscosity)
+        self.gdot = np.zeros(nf)
+        self.p_floor = 0.5 * self.rho * G * math.cos(th) * self.dx if c.rheology.model == "mu_i" else 0.0
+        self.p_fs = 0.5 * self.rho * G * math.cos(th) * self.dx if c.numerics.free_surface_pressure == "half_layer" else 0.0
+        self.fs = np.zeros(nf, dtype=bool)
+        self.c0 = reference_concentration(self.h, self.dx)
+        lc = lattice_constants(c.numerics.h_factor, 0.01, c.wall_layers)
+        self.lap_norm, self.wall_ns, self.wall_k = lc["lap"], lc["wall_ns"], lc["wall_k"]
+        self.a_full = (reference_laplacian_sum(self.h, self.dx, self.eps2) / self.lap_norm
+                       if c.numerics.kernel_completion else 0.0)
+        self.slip = ph.SLIP_CODES[c.wall.slip]
+        self.mean = ph.MEAN_CODES[c.rheology.pair_mean]
+        planes = [(0.0, 1.0, 0.0)] + ([(1.0, 0.0, 0.0)] if c.geometry.back_wall else [])
+        self.planes = np.array(planes, dtype=float)
+        self.u_eps = c.wall.stick_speed
+        self.mu_wall = math.tan(math.radians(c.wall.phi_wall_deg))
+        self.t = 0.0
+        self.step_no = 0
+        self.stats = SolverStats()
+        self.dt = 0.0
+        # domain box for escape checks
+        self.xmin = -0.5 * self.dx if c.geometry.back_wall else -math.inf
+        self.xmax = c.domain_length if self.period <= 0 else math.inf
+        self.ymin = -0.5 * self.dx
+        self.ymax = c.geometry.H0 + max(1.0, 5.0 * c.geometry.H0)
+
+    # ------------------------------------------------------------------------------------------
+    def time_step(self) -> float:
+        n = self.cfg.numerics
+        umax = float(np.sqrt(np.max(self.u ** 2 + self.v ** 2))) if self.nf else 0.0
+        dt = min(n.dt_max, 0.25 * math.sqrt(self.h / G))
+        if umax > 0:
+            dt = min(dt, n.cfl * self.h / umax)
+        return dt
+
+    def step(self, dt: float) -> None:
+        c = self.cfg
+        nf, h, vol, rho = self.nf, self.h, self.vol, self.rho
+        t0 = _time.perf_counter()
+        start, nbr, rx, ry, rr = build_neighbours(self.x, self.y, nf, self.radius, self.period)
+        t1 = _time.perf_counter()
+        P = self.parts
+        divr, conc, gcx, gcy, lmat = ph.geometry_terms(start, nbr, rx, ry, rr, nf, h, vol)
+        self.fs = divr < c.numerics.free_surface_threshold
+        rh = c.rheology
+        # pressure seen by the friction law (eq 5): clipped below at the overburden of half a
+        # particle layer, ρ g cosθ dx/2 (free-surface and thin-front particles keep friction)
+        self.p_rheo = np.maximum(self.p, self.p_floor)
+        if rh.model == "mu_i":
+            grad = ph.velocity_gradient(start, nbr, rx, ry, rr, nf, h, vol, self.x, self.y, self.u, self.v,
+                                        lmat, self.p_rheo, self.eta, P.wnx, P.wny, P.wc, self.slip,
+                                        c.wall.slip_length, self.mu_wall, self.dx, self.gx, self.gy, self.rho,
+                                        rh.eta_max, self.wall_ns, self.wall_k)
+            m = c.material
+            self.eta, self.gdot = ph.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
+                                                    rh.eta_min, rh.eta_max)
+        t2 = _time.perf_counter()
+        indptr, indices, data, diag_v = ph.assemble_viscous(start, nbr, rx, ry, rr, nf, h, vol, self.x, self.y,
+                                                    self.u, self.v, self.p_rheo, self.eta, P.wnx, P.wny, P.wc,
+                                                    self.slip, c.wall.slip_length, self.mu_wall, self.dx,
+                                                    dt, rho, self.eps2, self.mean, self.gx, self.gy,
+                                                    rh.eta_max, self.lap_norm, self.wall_ns, self.wall_k)
+        if self.slip == ph.SLIP_COULOMB:
+            diag_u = data[indptr[:-1]].copy()
+            ph.coulomb_wall_drag(nf, self.x, self.y, self.u, self.v, self.p_rheo, self.planes, self.mu_wall,
+                                 self.gx, self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v)
+            data[indptr[:-1]] = diag_u
+        us = _solve_direct(indptr, indices, data, [self.u + dt * self.gx])[0]
+        data_v = data.copy()
+        data_v[indptr[:-1]] = diag_v
+        vs = _solve_direct(indptr, indices, data_v, [self.v + dt * self.gy])[0]
+        t3 = _time.perf_counter()
+        div = ph.divergence(start, nbr, rx, ry, rr, nf, h, vol, us, vs)
+        unknown = np.full(nf, -1, np.int64)
+        interior = ~self.fs
+        n_unknown = int(interior.sum())
+        unknown[interior] = np.arange(n_unknown)
+        # free-surface Dirichlet value: p = 0 holds on the surface, which lies dx/2 beyond the centre
+        # of a free-surface particle: p_fs = ρ g cosθ dx/2 (bed-normal hydrostatics), or 0
+        p_new = np.where(self.fs, self.p_fs, 0.0)
+        if n_unknown:
+            pi, pj, pd, rhs = ph.assemble_ppe(start, nbr, rx, ry, rr, nf, h, vol, unknown, n_unknown, p_new, div,
+                                              us, vs, conc, self.c0, c.numerics.density_relaxation, P.wnx, P.wny,
+                                              dt, rho, self.eps2, self.a_full, self.lap_norm)
+            p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
+        t4 = _time.perf_counter()
+        self.p = p_new
+        gpx, gpy = ph.pressure_gradient(start, nbr, rx, ry, rr, nf, h, vol, self.p, us, vs, lmat, P.wnx, P.wny,
+                                        dt, rho)
+        self.u = us - dt / rho * gpx
+        self.v = vs - dt / rho * gpy
+        sx, sy = ph.shifting(nf, gcx, gcy, self.u, self.v, self.fs, h, dt, c.numerics.shifting, self.dx)
+        self.x[:nf] += dt * self.u + sx
+        self.y[:nf] += dt * self.v + sy
+        if self.period > 0:
+            self.x[:nf] %= self.period
+        self._last_us = (us, vs, dt)
+        self.t += dt
+        self.step_no += 1
+        t5 = _time.perf_counter()
+        st = self.stats
+        st.steps += 1
+        st.t_neigh += t1 - t0
+        st.t_kern += (t2 - t1) + (t5 - t4)
+        st.t_visc += t3 - t2
+        st.t_ppe += t4 - t3
+        self._check()
+
+    def _solve_ppe(self, indptr, indices, data, rhs, guess):
+        if self.cfg.numerics.pressure_solver == "direct":
+            return _solve_direct(indptr, indices, data, [rhs])[0]
+        n = indptr.size - 1
+        a = sp.csr_matrix((data, indices, indptr), shape=(n, n))
+        dinv = 1.0 / a.diagonal()
+        m = spla.LinearOperator((n, n), matvec=lambda z: dinv * z)
+        it = [0]
+
+        def cb(_):
+            it[0] += 1
+        sol, info = spla.cg(a, rhs, x0=guess, rtol=1e-8, atol=0.0, maxiter=5000, M=m, callback=cb)
+        self.stats.ppe_iters += it[0]
+        if info != 0:
+            LOG.warning("PPE CG did not converge (info=%d) at t=%.4f; falling back to SuperLU", info, self.t)
+            return _solve_direct(indptr, indices, data, [rhs])[0]
+        return sol
+
+    def _check(self) -> None:
+        nf = self.nf
+        bad = ~(np.isfinite(self.u) & np.isfinite(self.v) & np.isfinite(self.p))
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise IsphBlowUp(f"non-finite velocity/pressure at t={self.t:.5f} s, step {self.step_no}, "
+                             f"particle {k} at (x, y) = ({self.x[k]:.4f}, {self.y[k]:.4f}) m")
+        x, y = self.x[:nf], self.y[:nf]
+        out = (x < self.xmin) | (x > self.xmax) | (y < self.ymin) | (y > self.ymax) | ~np.isfinite(x) | ~np.isfinite(y)
+        if out.any():
+            k = int(np.flatnonzero(out)[0])
+            raise IsphBlowUp(f"particle {k} left the domain at t={self.t:.5f} s, step {self.step_no}: "
+                             f"(x, y) = ({x[k]:.4f}, {y[k]:.4f}) m outside x in [{self.xmin:.4f}, {self.xmax:.4f}],"
+                             f" y in [{self.ymin:.4f}, {self.ymax:.4f}]")
+
+    # ------------------------------------------------------------------------------------------
+    def kinetic_energy(self) -> float:
+        return float(0.5 * self.rho * self.vol * np.sum(self.u ** 2 + self.v ** 2))
+
+    def max_speed(self) -> float:
+        return float(np.sqrt(np.max(self.u ** 2 + self.v ** 2))) if self.nf else 0.0
+
+    def front(self) -> float:
+        """Front: granular particles binned into bed-parallel cells of width dx; cell depth =
+        max y + dx/2 (0 if empty); then the shared front rule (first cell thinner than threshold)."""
+        return front_position(self.x[:self.nf], self.y[:self.nf], self.dx, self.cfg.front_depth_threshold,
+                              self.cfg.domain_length)
+
+
+def front_position(x: np.ndarray, y: np.ndarray, dx: float, threshold: float, length: float) -> float:
+    ncell = int(math.ceil(length / dx)) + 1
+    edges = np.arange(ncell + 1) * dx
+    idx = np.clip((x / dx).astype(np.int64), 0, ncell - 1)
+    depth = np.zeros(ncell)
+    np.maximum.at(depth, idx, y + 0.5 * dx)
+    return front_from_profile(edges, depth, threshold)
+
+
+def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, solver: IsphSolver | None = None):
+    """Advance to rest or t_end, storing snapshots every ``output.interval``.
+
+    Returns (solver, snapshots, status, time_to_rest). Raises IsphBlowUp with the partial
+    snapshots attached (``exc.snapshots``) on NaN or escape.
+    """
+    s = solver if solver is not None else IsphSolver(cfg)
+    out = cfg.output
+    snaps = Snapshots()
+    t_end = cfg.t_end
+    progress = progress or Progress(out.progress_s)
+    tol = 1e-9
+
+    def snap():
+        nf = s.nf
+        snaps.time.append(s.t)
+        f = snaps.fields
+        f["x"].append(s.x[:nf].astype(np.float32))
+        f["y"].append(s.y[:nf].astype(np.float32))
+        f["u"].append(s.u.astype(np.float32))
+        f["v"].append(s.v.astype(np.float32))
+        f["pressure"].append(s.p.astype(np.float32))
+        f["viscosity"].append(s.eta.astype(np.float32))
+        f["free_surface"].append(s.fs.astype(np.int8))
+        snaps.front.append(s.front())
+        snaps.kinetic.append(s.kinetic_energy())
+        snaps.max_speed.append(s.max_speed())
+        snaps.steps.append(s.step_no)
+        if on_snapshot is not None:
+            on_snapshot(s, snaps)
+
+    def message():
+        el = max(s.stats.wall_s, 1e-9)
+        return (f"isph {cfg.case}: t={s.t:.4f} s ({s.t / cfg.t_c:.2f} t_c), steps={s.step_no}, "
+                f"{s.step_no / el:.1f} steps/s, dt={s.dt:.2e} s, front={snaps.front[-1] if snaps.front else float('nan'):.4f} m, "
+                f"KE={s.kinetic_energy():.3e} J/m, max|u|={s.max_speed():.3e} m/s")
+
+    snap()
+    next_out = out.interval
+    rest_since = None
+    started = False
+    time_to_rest = float("nan")
+    status = "t_end reached"
+    wall0 = _time.perf_counter()
+    try:
+        while s.t < t_end - tol:
+            if s.step_no >= cfg.numerics.max_steps:
+                status = f"max_steps ({cfg.numerics.max_steps}) reached"
+                break
+            dt = s.time_step()
+            dt = min(dt, next_out - s.t, t_end - s.t)
+            s.dt = dt
+            s.step(dt)
+            s.stats.wall_s = _time.perf_counter() - wall0
+            vmax = s.max_speed()
+            if vmax > 10.0 * out.rest_speed or s.t > 5.0 * cfg.t_c:
+                started = True
+            if started and vmax < out.rest_speed:
+                if rest_since is None:
+                    rest_since = s.t
+            else:
+                rest_since = None
+            if s.t >= next_out - tol:
+                snap()
+                next_out += out.interval
+                progress(message)
+                if rest_since is not None and s.t - rest_since >= out.rest_duration - tol:
+                    time_to_rest = rest_since
+                    if out.stop_at_rest:
+                        status = "at rest"
+                        break
+    except IsphBlowUp as exc:
+        s.stats.wall_s = _time.perf_counter() - wall0
+        exc.snapshots = snaps
+        exc.solver = s
+        raise
+    s.stats.wall_s = _time.perf_counter() - wall0
+    if math.isnan(time_to_rest) and rest_since is not None and s.t - rest_since >= out.rest_duration - tol:
+        time_to_rest = rest_since
+    if status != "at rest" and not math.isnan(time_to_rest):
+        status = "at rest"
+    progress(message, final=True)
+    return s, snaps, status, time_to_rest
