@@ -234,3 +234,15 @@ def test_kernels_also_work_uncompiled():
                           "planted_interface or divr or empty or section_reduce or membership"],
                          env=env, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stdout[-2000:] + res.stderr[-2000:]
+
+
+def test_incomplete_run_is_flagged(caplog):
+    import logging
+    run = strip_run()
+    run["time_to_rest"] = run.time_to_rest.copy(data=np.nan)
+    run.attrs["status"] = "failed: particle 1 left the domain"
+    with caplog.at_level(logging.WARNING, logger="granudep"):
+        ds = monitor(run)
+    assert ds.attrs["run_complete"] == 0 and "failed" in ds.attrs["run_status"]
+    assert "did not reach rest" in caplog.text
+    assert monitor(strip_run()).attrs["run_complete"] == 1

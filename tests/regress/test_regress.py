@@ -226,3 +226,11 @@ def test_regress_config_refuses_bad_values():
     with pytest.raises(ConfigError, match="regress.onset_depth_factor: must be > 0"):
         regress(make_sections()[0], onset_depth_factor=0.0)
     assert RegressConfig().fit_x_min == 0.0 and RegressConfig().fit_x_max == 1.0
+
+
+def test_incomplete_run_noted_in_coefficients():
+    ds, _ = make_sections()
+    ds.attrs["run_complete"] = 0
+    row = regress(ds)["coefficients"].iloc[0]
+    assert "did not reach rest" in row.note and np.isfinite(row.A)  # fitted, but flagged
+    assert regress(make_sections()[0])["coefficients"].note.iloc[0] == ""

@@ -63,8 +63,15 @@ def _geometry(run: xr.Dataset, cfg: MonitorConfig) -> dict:
         raise ConfigError("run.final_front_position: missing; give monitor.x_inf (m from the back wall)")
     if not (math.isfinite(x_inf) and x_inf > g["L0"]):
         raise ConfigError(f"x_inf: must be > L0 = {g['L0']} m (got {x_inf!r}); the sections span [L0, x_inf]")
+    time_to_rest = float(run["time_to_rest"]) if "time_to_rest" in run.variables else math.nan
+    status = str(run.attrs.get("status", ""))
+    complete = math.isfinite(time_to_rest) and not status.lower().startswith("failed")
+    if not complete and cfg.x_inf is None:
+        LOG.warning("run %s did not reach rest (status: %s; time_to_rest = %s): x_inf = final_front_position "
+                    "= %.4f m is not the final runout and late onsets are cut off", run.attrs.get("case", "?"),
+                    status or "unknown", time_to_rest, x_inf)
     theta = math.radians(g["theta_deg"])
-    g.update(x_inf=x_inf, theta=theta, a=g["H0"] / g["L0"],
+    g.update(time_to_rest=time_to_rest, complete=complete, x_inf=x_inf, theta=theta, a=g["H0"] / g["L0"],
              t_c=cases.characteristic_time(g["H0"], theta), p0=cases.momentum_scale(g["H0"], theta))
     return g
 
@@ -147,6 +154,9 @@ def _base_dataset(run: xr.Dataset, cfg: MonitorConfig, g: dict, width: float) ->
                     y_bed=0.0, depth_frame="slope-aligned: y bed-normal, no 1/cos(theta) in eq 17")
     if "title" in run.attrs:
         ds.attrs["source_title"] = str(run.attrs["title"])
+    ds.attrs["run_status"] = str(run.attrs.get("status", "unknown"))
+    ds.attrs["run_time_to_rest"] = g["time_to_rest"]
+    ds.attrs["run_complete"] = int(g["complete"])
     return ds
 
 

@@ -39,6 +39,11 @@ def coefficient_table(critical: pd.DataFrame, cfg: RegressConfig) -> pd.DataFram
             LOG.warning("regress %s: %s", case, note)
         else:
             A, B, r2, _ = linear_fit(use.x_norm, use.momentum_critical_norm)
+        if "run_complete" in grp and not bool(grp.run_complete.iloc[0]):
+            extra = ("the 2D run did not reach rest: x_inf is not its final runout and later onsets are "
+                     "missing; A, B are not meaningful")
+            note = f"{note}; {extra}" if note else extra
+            LOG.warning("regress %s: %s", case, extra)
         theta = math.radians(float(first.theta_deg))
         rows.append({"case": case, "theta_deg": float(first.theta_deg), "a": float(first.a),
                      "L0": float(first.L0), "H0": float(first.H0), "A": A, "B": B, "r2": r2,

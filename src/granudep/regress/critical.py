@@ -116,6 +116,7 @@ def critical_table(ds: xr.Dataset, cfg: RegressConfig) -> pd.DataFrame:
     hd = np.asarray(ds["deposit_depth"].transpose("section", "time").values, dtype=float)
     mom = np.asarray(ds["momentum"].transpose("section", "time").values, dtype=float) / p0
     eps = cfg.onset_depth_factor * g["dx"]
+    complete = bool(int(ds.attrs.get("run_complete", 1)))
     rows = []
     for k in range(hd.shape[0]):
         t_crit, i0, status = onset_time(t_s, hd[k], eps)
@@ -128,6 +129,6 @@ def critical_table(ds: xr.Dataset, cfg: RegressConfig) -> pd.DataFrame:
             "x_norm": round(float(ds["x_norm"].values[k]), 10),
             "t_s_critical": t_crit, "t_s_critical_fit": t_fit, "deposition_rate": rate, "r2": r2,
             "n_fit": n, "momentum_critical_norm": m_crit, "momentum_critical": m_crit * p0,
-            "t_c": t_c, "p0": p0, "status": status,
+            "t_c": t_c, "p0": p0, "status": status, "run_complete": complete,
         })
     return pd.DataFrame(rows)
