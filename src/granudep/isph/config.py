@@ -25,7 +25,7 @@ class Geometry:
     L0: float = param(0.2, gt=0.0, le=5.0, unit="m", doc="column length (gate at x = L0)")
     H0: float = param(0.14, gt=0.0, le=5.0, unit="m", doc="column height")
     domain_length: float | None = param(None, gt=0.0, unit="m",
-                                        doc="bed length from the back wall; null = L0 + max(0.8 m, 8 H0)")
+                                        doc="bed length from the back wall; null = L0 + max(2.5 m, 15 H0)")
     back_wall: bool = param(True, doc="rigid wall at x = 0 (column collapse); false for periodic layers")
     periodic_length: float = param(0.0, ge=0.0, unit="m",
                                    doc="> 0: periodic in x with this period (layer tests; no back wall)")
@@ -168,7 +168,7 @@ class IsphConfig:
         g = self.geometry
         if g.periodic_length > 0:
             return g.periodic_length
-        return g.domain_length if g.domain_length is not None else g.L0 + max(0.8, 8.0 * g.H0)
+        return g.domain_length if g.domain_length is not None else g.L0 + max(2.5, 15.0 * g.H0)
 
     @property
     def front_depth_threshold(self) -> float:

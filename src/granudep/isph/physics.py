@@ -72,6 +72,8 @@ def geometry_terms(start, nbr, rx, ry, rr, nf, h, vol):
     gcx = np.zeros(nf)
     gcy = np.zeros(nf)
     lmat = np.zeros((nf, 4))
+    m_xx = np.zeros(nf)
+    m_yy = np.zeros(nf)
     w0 = wendland_w(0.0, h)
     for i in range(nf):
         s_div = 0.0
@@ -96,6 +98,8 @@ def geometry_terms(start, nbr, rx, ry, rr, nf, h, vol):
         conc[i] = s_c
         gcx[i] = sx
         gcy[i] = sy
+        m_xx[i] = mxx
+        m_yy[i] = myy
         det = mxx * myy - mxy * mxy
         if det > 0.1 and mxx > 0.0 and myy > 0.0:
             lmat[i, 0] = myy / det
@@ -105,7 +109,7 @@ def geometry_terms(start, nbr, rx, ry, rr, nf, h, vol):
         else:
             lmat[i, 0] = 1.0
             lmat[i, 3] = 1.0
-    return divr, conc, gcx, gcy, lmat
+    return divr, conc, gcx, gcy, lmat, (m_xx, m_yy)
 
 
 @njit(cache=True)
@@ -241,33 +245,76 @@ def assemble_viscous(start, nbr, rx, ry, rr, nf, h, vol, x, y, u, v, p, eta, wnx
 
 
 @njit(cache=True)
-def coulomb_wall_drag(nf, x, y, u, v, p, planes, mu_wall, gx, gy, rho, dx, dt, u_eps, diag_u, diag_v):
-    """Coulomb wall friction as an implicit drag on the particles touching a wall (slip = coulomb).
-
-    For each wall plane (n, c) and particle at distance d = n·x − c < 1.5 dx (weight w = 1 up to
-    d = dx, then linearly to 0 at 1.5 dx: the first particle layer, also when it hovers), the
-    traction μ_B p_w on the particle's bed area dx, p_w = max(p_i, 0) + ρ max(−g·n, 0) d (pressure
-    extrapolated to the wall), gives the acceleration −μ_B p_w/(ρ dx) u_t/|u_t|, regularised as the
-    drag k u_t with k = w μ_B p_w/(ρ dx max(|u_t|, u_eps)) and added implicitly to the diagonal
-    (tangential component only). Sticks when |u_t| < u_eps (static friction up to μ_B p_w).
-    """
+def wall_contact(start, nbr, nf, x, y, planes, dx, h):
+    """Per particle and wall plane (n, c): distance d = n·x − c if the particle is the first layer
+    over that wall (d < 2h and no granular particle between it and the wall, i.e. none with
+    d_j < d − dx/2 within a tangential offset dx), else +inf; and the height of the granular
+    column over a contact particle (largest d_j of the neighbours within a tangential offset dx/2,
+    + dx/2), from which the contact pressure of thin flows is estimated."""
+    npl = planes.shape[0]
+    dist = np.full((nf, npl), np.inf)
+    col = np.zeros((nf, npl))
     for i in range(nf):
-        for q in range(planes.shape[0]):
+        for q in range(npl):
             nx = planes[q, 0]
             ny = planes[q, 1]
             d = nx * x[i] + ny * y[i] - planes[q, 2]
-            if d >= 1.5 * dx:
+            if d >= 2.0 * h:
                 continue
-            w = min(1.0, (1.5 * dx - d) / (0.5 * dx))
-            pw = max(p[i], 0.0) + rho * max(-(gx * nx + gy * ny), 0.0) * max(d, 0.0)
+            covered = False
+            for k in range(start[i], start[i + 1]):
+                j = nbr[k]
+                if j >= nf:
+                    continue
+                dj = nx * x[j] + ny * y[j] - planes[q, 2]
+                if dj < d - 0.5 * dx:
+                    off = abs(-ny * (x[i] - x[j]) + nx * (y[i] - y[j]))
+                    if off < dx:
+                        covered = True
+                        break
+            if not covered:
+                dist[i, q] = d
+                top = d
+                for k in range(start[i], start[i + 1]):
+                    j = nbr[k]
+                    if j >= nf:
+                        continue
+                    dj = nx * x[j] + ny * y[j] - planes[q, 2]
+                    if dj > top and abs(-ny * (x[i] - x[j]) + nx * (y[i] - y[j])) < 0.5 * dx:
+                        top = dj
+                col[i, q] = top + 0.5 * dx
+    return dist, col
+
+
+@njit(cache=True)
+def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, dx, dt, u_eps, diag_u, diag_v):
+    """Coulomb wall friction as an implicit drag on the first particle layer (slip = coulomb).
+
+    For a particle in contact with wall plane (n, c) (:func:`wall_contact`), the traction μ_B p_w
+    on its bed area dx, with the contact pressure p_w = max(p_i + g_n ρ dx/2, g_n ρ h_col) (PPE pressure
+    extrapolated to the wall, or the weight of the column h_col above the particle where that is
+    larger: in flows a few particles thick all particles are free-surface particles with Dirichlet
+    pressure), g_n = max(−g·n, 0), gives
+    the acceleration −μ_B p_w/(ρ dx) u_t/|u_t|, regularised as the drag k u_t,
+    k = μ_B p_w/(ρ dx max(|u_t|, u_eps)), added implicitly to the diagonal of the tangential
+    component. It sticks (static friction up to μ_B p_w) when |u_t| < u_eps.
+    """
+    for i in range(nf):
+        for q in range(planes.shape[0]):
+            if not contact[i, q] < np.inf:
+                continue
+            nx = planes[q, 0]
+            ny = planes[q, 1]
+            gn = max(-(gx * nx + gy * ny), 0.0)
+            pw = max(max(p[i], 0.0) + rho * gn * 0.5 * dx, rho * gn * col[i, q])
             un = u[i] * nx + v[i] * ny
             utx = u[i] - un * nx
             uty = v[i] - un * ny
             ut = math.sqrt(utx * utx + uty * uty)
-            k = w * mu_wall * pw / (rho * dx * max(ut, u_eps))
+            kd = mu_wall * pw / (rho * dx * max(ut, u_eps))
             # tangent t = (-n_y, n_x)
-            diag_u[i] += dt * k * ny * ny
-            diag_v[i] += dt * k * nx * nx
+            diag_u[i] += dt * kd * ny * ny
+            diag_v[i] += dt * kd * nx * nx
 
 
 @njit(cache=True)
@@ -352,8 +399,12 @@ def assemble_ppe(start, nbr, rx, ry, rr, nf, h, vol, unknown, n_unknown, p_dir, 
 
 
 @njit(cache=True)
-def pressure_gradient(start, nbr, rx, ry, rr, nf, h, vol, p, us, vs, lmat, wnx, wny, dt, rho):
-    """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure."""
+def pressure_gradient(start, nbr, rx, ry, rr, nf, h, vol, p, us, vs, lmat, wnx, wny, dt, rho, detached):
+    """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure.
+
+    ``detached`` particles (first layer over a wall but farther than 0.75 dx from it) ignore the
+    wall: with the renormalisation the mirror pressure would otherwise hold them at any height
+    within the kernel support (2h), hovering without contact."""
     gpx = np.zeros(nf)
     gpy = np.zeros(nf)
     for i in range(nf):
@@ -365,6 +416,8 @@ def pressure_gradient(start, nbr, rx, ry, rr, nf, h, vol, p, us, vs, lmat, wnx, 
             if j < nf:
                 dp = p[j] - p[i]
             else:
+                if detached[i]:
+                    continue
                 w = j - nf
                 nx = wnx[w]
                 ny = wny[w]

@@ -140,8 +140,11 @@ class IsphSolver:
         start, nbr, rx, ry, rr = build_neighbours(self.x, self.y, nf, self.radius, self.period)
         t1 = _time.perf_counter()
         P = self.parts
-        divr, conc, gcx, gcy, lmat = ph.geometry_terms(start, nbr, rx, ry, rr, nf, h, vol)
+        divr, conc, gcx, gcy, lmat, mdiag = ph.geometry_terms(start, nbr, rx, ry, rr, nf, h, vol)
         self.fs = divr < c.numerics.free_surface_threshold
+        contact, col = ph.wall_contact(start, nbr, nf, self.x, self.y, self.planes, self.dx, h)
+        detached = np.min(contact, axis=1) > 0.75 * self.dx
+        detached &= np.isfinite(np.min(contact, axis=1))
         rh = c.rheology
         # pressure seen by the friction law (eq 5): clipped below at the overburden of half a
         # particle layer, ρ g cosθ dx/2 (free-surface and thin-front particles keep friction)
@@ -162,8 +165,8 @@ class IsphSolver:
                                                     rh.eta_max, self.lap_norm, self.wall_ns, self.wall_k)
         if self.slip == ph.SLIP_COULOMB:
             diag_u = data[indptr[:-1]].copy()
-            ph.coulomb_wall_drag(nf, self.x, self.y, self.u, self.v, self.p_rheo, self.planes, self.mu_wall,
-                                 self.gx, self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v)
+            ph.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall, self.gx,
+                                 self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v)
             data[indptr[:-1]] = diag_u
         us = _solve_direct(indptr, indices, data, [self.u + dt * self.gx])[0]
         data_v = data.copy()
@@ -185,8 +188,16 @@ class IsphSolver:
             p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
         t4 = _time.perf_counter()
         self.p = p_new
-        gpx, gpy = ph.pressure_gradient(start, nbr, rx, ry, rr, nf, h, vol, self.p, us, vs, lmat, P.wnx, P.wny,
-                                        dt, rho)
+        # free-surface particles: diagonal renormalisation only (1/M_xx, 1/M_yy); with one-sided
+        # support the full inverse mixes the wall-normal pressure gradient into the tangential one
+        lmat_p = lmat.copy()
+        mxx, myy = mdiag
+        fsd = self.fs & (mxx > 0.1) & (myy > 0.1)
+        lmat_p[self.fs] = (1.0, 0.0, 0.0, 1.0)
+        lmat_p[fsd, 0] = 1.0 / mxx[fsd]
+        lmat_p[fsd, 3] = 1.0 / myy[fsd]
+        gpx, gpy = ph.pressure_gradient(start, nbr, rx, ry, rr, nf, h, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
+                                        dt, rho, detached)
         self.u = us - dt / rho * gpx
         self.v = vs - dt / rho * gpy
         sx, sy = ph.shifting(nf, gcx, gcy, self.u, self.v, self.fs, h, dt, c.numerics.shifting, self.dx)
