@@ -34,6 +34,7 @@ from . import cases
 from .config import ConfigError
 from .front import flow_time as _flow_time
 from .io import open_dataset
+from .progress import LOG
 
 #: the maximum relative errors the paper states in Section 4.3 (vs Farin et al. 2014 measurements)
 PAPER_MAX_ERRORS = {
@@ -43,7 +44,7 @@ PAPER_MAX_ERRORS = {
 }
 
 REFERENCE_COLUMNS = ("case", "a", "theta_deg", "final_runout_norm", "flow_time", "flow_time_norm",
-                     "front_definition", "provenance")
+                     "front_definition", "provenance", "note")
 #: default flow-time tolerance (m), the shared definition's default (docs/paper-notes.md)
 FLOW_TIME_TOL = 1e-3
 
@@ -102,6 +103,9 @@ def reference_row(run, tol: float = FLOW_TIME_TOL) -> dict:
         x_final = float(ds["final_front_position"].values)
     else:
         x_final = float(front[np.isfinite(front)][-1])
+    status = str(ds.attrs.get("status", "ok"))
+    if status.lower().startswith("failed"):
+        raise ConfigError(f"{where}: the 2D run did not finish ({status}); a failed run is not a reference")
     a = H0 / L0
     run_case = str(ds.attrs.get("case", Path(name).stem))
     case = match_table5(a, theta)
@@ -109,14 +113,23 @@ def reference_row(run, tol: float = FLOW_TIME_TOL) -> dict:
         case = run_case
     tf = _flow_time(time, front, tol)
     tc = cases.characteristic_time(H0, math.radians(theta))
+    # at rest: the run's own verdict when it gives one, else the front stopped before the last output
+    if "time_to_rest" in ds:
+        at_rest = bool(np.isfinite(float(ds["time_to_rest"].values)))
+    else:
+        at_rest = bool(np.isfinite(tf) and tf < time[-1])
+    if not at_rest:
+        LOG.warning("%s: the 2D run is not at rest at t_end = %.3g s: its runout and flow time are lower "
+                    "bounds (note column)", where, time[-1])
     dx = ds.attrs.get("dx")
-    dx_text = f"dx={float(dx):g} m" if dx is not None else ""
+    dx_text = f", dx={float(dx):g} m" if dx is not None else ""
     return {
         "case": case, "a": a, "theta_deg": theta,
         "final_runout_norm": (x_final - L0) / L0,
         "flow_time": tf, "flow_time_norm": tf / tc,
         "front_definition": front_definition(ds.attrs.get("front_depth_threshold"), tol),
-        "provenance": f"granudep 2D ISPH, {dx_text}({run_case}, file {name})".replace(", (", " ("),
+        "provenance": f"granudep 2D ISPH{dx_text} ({run_case}, file {name})",
+        "note": "" if at_rest else f"not at rest at t_end = {time[-1]:.3g} s: lower bounds",
     }
 
 
@@ -151,6 +164,7 @@ def load_reference(table, name: str | None = None) -> pd.DataFrame:
         raise ConfigError(f"--reference {name}: every row needs a non-empty 'provenance'")
     if "reference" not in df.columns:
         df["reference"] = [source_label(p) for p in df["provenance"]]
+    df["note"] = df["note"].astype(object).where(df["note"].notna(), "").astype(str) if "note" in df.columns else ""
     for col in ("flow_time", "flow_time_norm", "front_definition"):
         if col not in df.columns:
             df[col] = np.nan if col != "front_definition" else "not stated"
@@ -197,7 +211,7 @@ def da_summary(run) -> dict:
 COMPARE_COLUMNS = ("case", "a", "variant", "deposition", "reference", "provenance", "final_runout_norm",
                    "reference_final_runout_norm", "runout_rel_error", "flow_time", "reference_flow_time",
                    "flow_time_norm", "reference_flow_time_norm", "flow_time_rel_error", "flow_time_basis",
-                   "da_front_definition", "reference_front_definition", "da_file")
+                   "da_front_definition", "reference_front_definition", "reference_note", "da_file")
 
 
 def compare(da_runs: Iterable, references: Iterable) -> pd.DataFrame:
@@ -220,7 +234,7 @@ def compare(da_runs: Iterable, references: Iterable) -> pd.DataFrame:
                          "reference_final_runout_norm": np.nan,
                          "runout_rel_error": np.nan, "reference_flow_time": np.nan,
                          "reference_flow_time_norm": np.nan, "flow_time_rel_error": np.nan,
-                         "flow_time_basis": "", "reference_front_definition": ""})
+                         "flow_time_basis": "", "reference_front_definition": "", "reference_note": ""})
             continue
         for _, r in match.iterrows():
             rft, rftn = float(r["flow_time"]), float(r["flow_time_norm"])
@@ -233,7 +247,8 @@ def compare(da_runs: Iterable, references: Iterable) -> pd.DataFrame:
                          "runout_rel_error": _rel(d["final_runout_norm"], float(r["final_runout_norm"])),
                          "reference_flow_time": rft, "reference_flow_time_norm": rftn,
                          "flow_time_rel_error": err, "flow_time_basis": basis,
-                         "reference_front_definition": str(r["front_definition"])})
+                         "reference_front_definition": str(r["front_definition"]),
+                         "reference_note": str(r["note"])})
     if not rows:
         raise ConfigError("compare: no DA run given")
     out = pd.DataFrame(rows)

@@ -116,7 +116,8 @@ def section_compare(compare) -> str:
     out.append(md_table(show, {"case": ("case", ""), "variant": ("DA variant", ""), "reference": ("reference", ""),
                                "final_runout_norm": ("ΔL/L0 DA", ".3f"), "reference_final_runout_norm": ("ΔL/L0 ref.", ".3f"),
                                "runout_rel_error": ("runout error %", "+.1f"), "flow_time": ("t_F DA (s)", ".3f"),
-                               "reference_flow_time": ("t_F ref. (s)", ".3f"), "flow_time_rel_error": ("flow-time error %", "+.1f")}))
+                               "reference_flow_time": ("t_F ref. (s)", ".3f"), "flow_time_rel_error": ("flow-time error %", "+.1f"),
+                               "reference_note": ("note on the reference", "")}))
     defs = sorted({str(d) for c in ("da_front_definition", "reference_front_definition") if c in df for d in df[c]
                    if isinstance(d, str) and d})
     if defs:

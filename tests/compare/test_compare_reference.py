@@ -121,3 +121,20 @@ def test_cli_reference_and_compare(isph_files, tmp_path, capsys):
     assert main(["compare", *da, "--reference", str(bad), "-o", str(tmp_path / "x.csv")]) == 2
     assert "provenance" in capsys.readouterr().err
     assert not (tmp_path / "x.csv").exists()
+
+
+def test_failed_2d_run_refused():
+    ds = syn.isph_run()
+    ds.attrs["status"] = "failed: particle 3 left the domain at t=1.0 s"
+    with pytest.raises(ConfigError, match="did not finish"):
+        reference_from_isph([ds])
+
+
+def test_2d_run_not_at_rest_flagged():
+    ds = syn.isph_run()
+    ds["time_to_rest"] = ds["time_to_rest"].copy(data=float("nan"))
+    ref = reference_from_isph([ds])
+    assert ref.note[0].startswith("not at rest at t_end = 1.6 s")
+    t = compare([syn.da_run("1D-A70", True)], [ref])
+    assert t.reference_note[0] == ref.note[0]
+    assert reference_from_isph([syn.isph_run()]).note[0] == ""

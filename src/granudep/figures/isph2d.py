@@ -107,7 +107,7 @@ def fig5(run, times=None, failure_t_s: float = 1.0):
     if not times:
         times = np.linspace(0.0, rest_time(ds), 6)
     idx = list(dict.fromkeys(_time_index(time, t) for t in times))
-    fig, axes = new_figure(1, 1, panel=(9.0, 3.8))
+    fig, axes = new_figure(1, 1, panel=(10.0, 3.4))
     ax = axes[0, 0]
     dx = float(ds.attrs["dx"])
     for c, i in zip(colours(len(idx), "plasma"), idx):
@@ -129,12 +129,14 @@ def fig5(run, times=None, failure_t_s: float = 1.0):
                  loc="left", fontsize=10)
     ax.set_xlabel("x along the slope from the back wall (m)")
     ax.set_ylabel("bed-normal height y (m)")
-    ax.set_aspect("equal")
-    ax.set_ylim(0, sc["H0"] * 1.15)
+    ax.set_ylim(0, sc["H0"] * 1.25)
     ax.set_xlim(0, None)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="upper right", ncol=2)
-    note(fig, f"Free surface = highest particle centre + dx/2 per column of width 2 dx. {txt}. {NO_FARIN}.")
+    status = str(ds.attrs.get("status", "ok"))
+    warn = f" Run status: {status}." if status.lower().startswith("failed") else ""
+    note(fig, f"Vertical scale exaggerated. Free surface = highest particle centre + dx/2 per column of width 2 dx. "
+              f"{txt[0].upper() + txt[1:]}. {NO_FARIN}.{warn}")
     return fig
 
 

@@ -63,9 +63,14 @@ def fig15(da_runs, reference_runs=(), reference_tables=(), flow_time_tol: float 
         for ds in refs.get(case, []):
             t = ds["time"].values
             front = ds["front_position"].values
-            ax.plot(t, (front - L0) / L0, color="k", lw=1.8, label=f"2D ISPH (dx = {float(ds.attrs.get('dx', np.nan)):g} m)")
-            tf = flow_time(t, front, flow_time_tol)
-            ax.axvline(tf, color="k", lw=0.8, ls=":")
+            status = str(ds.attrs.get("status", "ok"))
+            at_rest = bool(np.isfinite(float(ds["time_to_rest"].values))) if "time_to_rest" in ds else True
+            extra = " – run FAILED, partial" if status.lower().startswith("failed") else (
+                "" if at_rest else " – not at rest at t_end")
+            ax.plot(t, (front - L0) / L0, color="k", lw=1.8,
+                    label=f"2D ISPH (dx = {float(ds.attrs.get('dx', np.nan)):g} m){extra}")
+            if not extra:
+                ax.axvline(flow_time(t, front, flow_time_tol), color="k", lw=0.8, ls=":")
         for ds in sorted(by_case.get(case, []), key=lambda d: -int(d.attrs["deposition"])):
             st = DA_STYLE[int(ds.attrs["deposition"])]
             ax.plot(ds["time"].values, ds["runout"].values / L0, color=st["color"], ls=st["ls"], lw=1.5,
@@ -82,7 +87,7 @@ def fig15(da_runs, reference_runs=(), reference_tables=(), flow_time_tol: float 
         ax.set_ylim(bottom=0)
         ax.set_xlim(left=0)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="lower right")
+        ax.legend(fontsize=7, loc="best")
     hide_unused(axes, len(names))
     defs = "; ".join(sorted({f"{src} {front_note(th)}" for src, th in thresholds}))
     note(fig, f"ΔL = x_front − L0 (from the gate). {defs}. Dotted verticals: flow time t_F (front moves "
