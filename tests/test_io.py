@@ -50,3 +50,13 @@ def test_write_text_replaces_atomically(tmp_path):
     write_text("a\n", p)
     write_text("b\n", p)
     assert p.read_text() == "b\n" and len(list(tmp_path.iterdir())) == 1
+
+
+def test_written_files_get_umask_permissions(tmp_path):
+    import os
+    umask = os.umask(0o022)
+    try:
+        p = write_text("x\n", tmp_path / "perm.txt")
+    finally:
+        os.umask(umask)
+    assert (p.stat().st_mode & 0o777) == 0o644
