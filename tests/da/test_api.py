@@ -87,3 +87,20 @@ def test_cli_runs_a_yaml_case_and_prints_the_summary(tmp_path):
     assert "final runout dL/L0 =" in out.stdout and "flow time" in out.stdout and "front =" in out.stdout
     ds = open_dataset(out_nc)
     assert ds.attrs["case"] == "mine" and ds.attrs["deposition"] == 0
+
+
+def test_example_configs_resolve():
+    from pathlib import Path
+    for path in sorted(Path(__file__).parents[2].joinpath("config", "da").glob("*.yaml")):
+        cfg = resolve(path)
+        assert cfg.case
+
+
+def test_verification_table_has_the_contract_columns(monkeypatch):
+    from granudep.da import verification as v
+    monkeypatch.setattr(v, "check_dam_break", lambda quick, *a: [])
+    for name in ("check_kerswell", "check_savage_hutter", "check_coulomb_block", "check_deposition"):
+        monkeypatch.setattr(v, name, lambda quick: [])
+    table = v.run_all(quick=True)
+    assert list(table.columns) == ["check", "quantity", "value", "reference", "error", "tolerance", "passed", "note"]
+    assert len(table) == 2 and table.passed.all()

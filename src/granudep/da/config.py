@@ -89,6 +89,8 @@ class Deposition:
                          doc="regularises 1/u of eq 14: S_D = α d(hu)/dt / max(|u|, u_min)")
     momentum_term: Literal["eq12", "none"] = param(
         "eq12", doc="deposition momentum loss g tanφ_I Δh_D / h (eq 12) or none")
+    deposit_as_bed: bool = param(True, doc="the deposit is bed topography: -g cosθ ∂h_D/∂x in the momentum "
+                                          "equation (not in eq 11; without it deposition digs holes in h)")
     min_volume_fraction: float = param(1e-6, gt=0.0, lt=1.0,
                                        doc="a particle below this fraction of its initial volume deposits entirely")
 

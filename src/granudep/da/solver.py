@@ -37,8 +37,13 @@ N_FIELDS = 5
 # indices of the parameter vector
 (P_G, P_SIN, P_COS, P_FRIC, P_KACT, P_KPASS, P_CFL, P_DELTA, P_QC, P_BSM, P_LFIX, P_WALL, P_XMAX,
  P_UREST, P_DEP, P_A, P_B, P_SCALE, P_L0, P_XINF, P_CLAMP, P_UMIN, P_MOM, P_TANI, P_MINV, P_DXG,
- P_MAXSTEPS) = range(27)
-N_PARAMS = 27
+ P_MAXSTEPS, P_BED) = range(28)
+N_PARAMS = 28
+
+# the Shepard sum of eq 22 is floored: a nearly emptied particle (deposition) at the edge of a full
+# particle's kernel has Σ V_j/h_j W_ij ≪ 1, and dividing by it gave accelerations of ~100 m/s² that
+# shot such particles out of the domain. Full or half support gives Σ ≈ 1 or ≥ 0.5: unaffected.
+SHEPARD_FLOOR = 0.5
 
 # status codes returned by ``advance``
 RUNNING, AT_REST, NONFINITE, ESCAPED, MAX_STEPS = 0, 1, 2, 3, 4
@@ -118,7 +123,7 @@ def gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, E, dhdx, dudx, xsph
             num += vj * du * gw
             den -= vj * r * gw
             xs += 2.0 * vj / (hi_ + hj) * du * w
-        dhdx[i] = -gh / shep if shep > 0.0 else 0.0
+        dhdx[i] = -gh / max(shep, SHEPARD_FLOOR)
         dudx[i] = num / den if den != 0.0 else 0.0
         xsph[i] = xs
 
@@ -206,6 +211,43 @@ def deposit_to_grid(dep, xp, dv, dxg):
 
 
 @njit(cache=True)
+def deposit_gradient(x, V, dep, dxg, L, qc, wall, out):
+    """∂h_D/∂x at the particles: the deposit (cell depths dep/dxg at the cell centres) smoothed with
+    the same kernel, ∂/∂x_i Σ_k h_D,k Δx W(x_i − x_k), mirrored at the wall like the particles."""
+    ng = dep.shape[0]
+    norm = kernel_norm(L, qc)
+    radius = qc * L
+    qc2 = qc * qc
+    ec = math.exp(-qc2)
+    g2 = 2.0 * norm / (L * L)
+    for i in range(x.shape[0]):
+        out[i] = 0.0
+        if V[i] <= 0.0:
+            continue
+        xi = x[i]
+        k0 = max(0, int(math.floor((xi - radius) / dxg)))
+        k1 = min(ng - 1, int(math.floor((xi + radius) / dxg)) + 1)
+        s = 0.0
+        for k in range(k0, k1 + 1):
+            if dep[k] == 0.0:
+                continue
+            r = xi - (k + 0.5) * dxg
+            q2 = (r / L) ** 2
+            if q2 < qc2:
+                s += dep[k] * g2 * r * (math.exp(-q2) - ec)
+        if wall and xi < radius:
+            k1 = min(ng - 1, int(math.floor((radius - xi) / dxg)) + 1)
+            for k in range(0, k1 + 1):
+                if dep[k] == 0.0:
+                    continue
+                r = xi + (k + 0.5) * dxg
+                q2 = (r / L) ** 2
+                if q2 < qc2:
+                    s += dep[k] * g2 * r * (math.exp(-q2) - ec)
+        out[i] = -s
+
+
+@njit(cache=True)
 def smoothing_length(F, prm):
     """Eq 25 generalised: L_s = B N / Σ_i n_i with n_i = Σ_j W_ij over particles with volume (for equal
     volumes n_i = h_i/V_i, eq 25 exactly); or the fixed L_s."""
@@ -261,6 +303,9 @@ def advance(x, F, order, dep, t, t_target, prm, nsteps):
     xn = np.empty(n)
     fr = np.zeros(n)
     fdv = np.zeros(n)
+    gb1 = np.zeros(n)
+    gb2 = np.zeros(n)
+    bed = dep_on and prm[P_BED] > 0.5
     L = 0.0
     dt = 0.0
     while t < t_target:
@@ -271,6 +316,8 @@ def advance(x, F, order, dep, t, t_target, prm, nsteps):
         u = F[F_U]
         V = F[F_V]
         evaluate(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h1, nd, dh1, du1, xs1)
+        if bed:
+            deposit_gradient(x, V, dep, dxg, L, qc, wall, gb1)
         vmax = 0.0
         for i in range(n):
             F[F_H, i] = h1[i]
@@ -290,7 +337,7 @@ def advance(x, F, order, dep, t, t_target, prm, nsteps):
             if V[i] <= 0.0:
                 a1[i] = 0.0
                 continue
-            a1[i] = gsin - earth_pressure(du1[i], k_act, k_pass) * gcos * dh1[i]
+            a1[i] = gsin - earth_pressure(du1[i], k_act, k_pass) * gcos * dh1[i] - gcos * gb1[i]
             if dep_on and h1[i] > 0.0:
                 an = net_acceleration(a1[i], u[i], fric)
                 au = abs(u[i])
@@ -317,13 +364,15 @@ def advance(x, F, order, dep, t, t_target, prm, nsteps):
                 ut[i] = 0.0
                 xt[i] = x[i]
         evaluate(xt, ut, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h2, nd2, dh2, du2, xs2)
+        if bed:
+            deposit_gradient(xt, V, dep, dxg, L, qc, wall, gb2)
         # corrector: eqs 30, 33, 31
         for i in range(n):
             if V[i] <= 0.0:
                 un[i] = 0.0
                 xn[i] = x[i]
                 continue
-            a2 = gsin - earth_pressure(du2[i], k_act, k_pass) * gcos * dh2[i]
+            a2 = gsin - earth_pressure(du2[i], k_act, k_pass) * gcos * dh2[i] - gcos * gb2[i]
             un[i] = coulomb_update(u[i] + 0.5 * dt * (a1[i] + a2), fdv[i])
             xn[i] = x[i] + dt * (0.5 * (u[i] + un[i]) + prm[P_DELTA] * xs2[i])
             if wall and xn[i] < 0.0:
@@ -434,6 +483,7 @@ def parameter_vector(cfg, phys: Physics, n_grid: int) -> np.ndarray:
     prm[P_MINV] = dep.min_volume_fraction
     prm[P_DXG] = cfg.output.dx_grid
     prm[P_MAXSTEPS] = float(num.max_steps)
+    prm[P_BED] = 1.0 if dep.deposit_as_bed else 0.0
     return prm
 
 

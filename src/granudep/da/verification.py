@@ -204,6 +204,27 @@ def check_savage_hutter(quick: bool = False):
     ]
 
 
+def check_deposition(quick: bool = False):
+    """Deposition bookkeeping on 1D-A70 (300 particles, x∞ = 1.5 m): flowing + deposited volume equals
+    the initial volume to round-off; with (hu)_C below every moving particle's momentum nothing
+    deposits and the run equals the run without deposition."""
+    from .api import run_da
+    case = {"case": "1D-A70", "numerics": {"n_particles": 300}, "output": {"dt_output": 0.05, "dx_grid": 2e-3}}
+    ds = run_da(case, x_inf_mode="user", x_inf=1.5)
+    v0 = float(ds.flowing_volume[0])
+    err = float(np.max(np.abs(ds.flowing_volume.values + ds.deposited_volume.values - v0))) / v0
+    off = run_da(case, ab_source="user", A=0.0, B=1e-12, x_inf_mode="user", x_inf=1.5)
+    ref = run_da(case, deposition=False)
+    diff = float(np.max(np.abs(off.x.values - ref.x.values)))
+    return [
+        _row("deposition", "volume balance", float(ds.deposited_volume[-1]) / v0, 0.0, err, 1e-13,
+             "max |V_flow + V_dep - V0| / V0 over the run (the value is the deposited fraction at rest)"),
+        _row("deposition", "no deposition above (hu)_C", float(off.deposited_volume.max()), 0.0,
+             float(off.deposited_volume.max()) / v0 + diff, 0.0,
+             "deposited fraction + max |x - x_no-deposition| (m) with (hu)_C = 1e-12 p0"),
+    ]
+
+
 def run_all(quick: bool = False) -> pd.DataFrame:
     """Every analytic check, one row per compared quantity."""
     rows = []
@@ -213,4 +234,5 @@ def run_all(quick: bool = False) -> pd.DataFrame:
     rows += check_kerswell(quick)
     rows += check_savage_hutter(quick)
     rows += check_coulomb_block(quick)
+    rows += check_deposition(quick)
     return pd.DataFrame(rows, columns=COLUMNS)
