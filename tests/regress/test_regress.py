@@ -66,6 +66,17 @@ def test_onset_rules():
     assert math.isnan(onset_time(t, np.ones(10), 0.25)[0])            # deposited from the start
     assert onset_time(t, np.ones(10), 0.25)[2] == "deposited from the first record"
     assert math.isnan(onset_time(t, np.r_[np.zeros(5), np.ones(4), 0.0], 0.25)[0])  # did not persist
+    # a momentary re-mobilisation (one sample back to h_D = 0) is bridged when max_gap allows it
+    hd = np.array([0, 0, 0.5, 1.0, 0, 1.0, 1.0, 1.0, 1.0, 1.0])
+    assert onset_time(t, hd, 0.25)[0] == pytest.approx(4.25)                 # max_gap = 0: never bridged
+    assert onset_time(t, hd, 0.25, max_gap=1.9)[0] == pytest.approx(4.25)    # around-gap samples 2 apart
+    tc, i, status = onset_time(t, hd, 0.25, max_gap=2.0)
+    assert (tc, i, status) == (pytest.approx(1.5), 2, "ok")
+    # … and the growth fit leaves the bridged (empty) sample out
+    rate, t_fit, r2, n = growth_fit(t, hd, i, 0.95, 2)
+    assert n == 2 and rate == pytest.approx(0.5) and t_fit == pytest.approx(1.0)
+    # bridging back to the first record means no onset was observed
+    assert onset_time(t, np.r_[1.0, 0, np.ones(8)], 0.25, max_gap=2.0)[2] == "deposited from the first record"
 
 
 def test_planted_ramp_gives_onset_time_and_rate():

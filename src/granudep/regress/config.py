@@ -11,6 +11,10 @@ class RegressConfig:
     onset_depth_factor: float = param(0.5, gt=0.0, le=10.0, unit="1",
                                       doc="onset (t_s)_C: the last upward crossing of h_D = this x dx "
                                           "(after it h_D stays above until the end of the record)")
+    onset_max_gap: float = param(0.5, ge=0.0, unit="1",
+                                 doc="dips of h_D below the onset depth whose surrounding samples above it lie at "
+                                     "most this far apart (in t_s) are bridged (a momentary "
+                                     "re-mobilisation does not reset the onset); 0 = never")
     growth_end_fraction: float = param(0.95, gt=0.0, le=1.0, unit="1",
                                        doc="the growth phase fitted for (S_D)_s and the Fig-9 intercept ends at "
                                            "the first sample with h_D >= this x final h_D")

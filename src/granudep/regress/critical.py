@@ -4,7 +4,8 @@ Rules (docs/paper-notes.md, "Monitoring sections and regression"):
 
 * onset (t_s)_C: the last upward crossing of h_D = ε (ε = onset_depth_factor·dx, default half a
   particle spacing), i.e. the first time after which h_D stays ≥ ε until the end of the record,
-  interpolated linearly between the bracketing samples. An empty section (NaN) counts as h_D = 0.
+  interpolated linearly between the bracketing samples; dips below ε whose surrounding samples above ε lie
+  ≤ onset_max_gap apart (t_s) are bridged. An empty section (NaN) counts as h_D = 0.
   No onset when the deposit does not persist to the end, or when h_D ≥ ε from the first sample.
 * growth phase: from the first sample after the crossing to the first sample with
   h_D ≥ growth_end_fraction·h_D(end); least-squares line h_D/H0 = (S_D)_s t_s + b over it, so
@@ -43,10 +44,13 @@ def linear_fit(x, y):
     return float(slope), float(intercept), r2, n
 
 
-def onset_time(t_s, h_D, eps: float):
-    """(t_C, i) with i the first sample of the final run of h_D ≥ eps; (nan, −1, reason) otherwise.
+def onset_time(t_s, h_D, eps: float, max_gap: float = 0.0):
+    """Last upward crossing of h_D = eps: (t_C, i, status), i = first sample of the final run of
+    h_D ≥ eps; (nan, −1, reason) when there is none.
 
-    Returns (t_C, i, status)."""
+    Gaps (runs of h_D < eps) between two runs above eps whose surrounding above-eps samples are at
+    most ``max_gap`` apart (in t_s) are bridged: a momentary re-mobilisation of a deposit does not
+    reset its onset."""
     t_s = np.asarray(t_s, dtype=float)
     hd = np.nan_to_num(np.asarray(h_D, dtype=float), nan=0.0)
     if hd.size == 0:
@@ -58,6 +62,18 @@ def onset_time(t_s, h_D, eps: float):
     if below.size == 0:
         return math.nan, -1, "deposited from the first record"
     i = int(below[-1]) + 1
+    while True:
+        gap_end = i - 1
+        earlier_above = np.flatnonzero(above[:gap_end])
+        if earlier_above.size == 0:
+            break
+        gap_start = int(earlier_above[-1]) + 1
+        if t_s[i] - t_s[gap_start - 1] > max_gap:  # time between the above-eps samples around the gap
+            break
+        earlier_below = np.flatnonzero(~above[:gap_start])
+        if earlier_below.size == 0:
+            return math.nan, -1, "deposited from the first record"
+        i = int(earlier_below[-1]) + 1
     h0, h1 = hd[i - 1], hd[i]
     frac = (eps - h0) / (h1 - h0) if h1 > h0 else 1.0
     return float(t_s[i - 1] + frac * (t_s[i] - t_s[i - 1])), i, "ok"
@@ -73,7 +89,8 @@ def growth_fit(t_s, h_D_norm, i_onset: int, end_fraction: float, min_points: int
     reach = np.flatnonzero(hd[i_onset:] >= end_fraction * final)
     j = hd.size - 1 if reach.size == 0 else i_onset + int(reach[0])
     sl = slice(i_onset, j + 1)
-    slope, intercept, r2, n = linear_fit(t_s[sl], hd[sl])
+    keep = hd[sl] > 0  # samples inside a bridged gap (no deposit) stay out of the fit
+    slope, intercept, r2, n = linear_fit(t_s[sl][keep], hd[sl][keep])
     if n < min_points or not slope > 0:
         return math.nan, math.nan, math.nan, n
     return slope, -intercept / slope, r2, n
@@ -119,7 +136,7 @@ def critical_table(ds: xr.Dataset, cfg: RegressConfig) -> pd.DataFrame:
     complete = bool(int(ds.attrs.get("run_complete", 1)))
     rows = []
     for k in range(hd.shape[0]):
-        t_crit, i0, status = onset_time(t_s, hd[k], eps)
+        t_crit, i0, status = onset_time(t_s, hd[k], eps, cfg.onset_max_gap)
         rate, t_fit, r2, n = growth_fit(t_s, hd[k] / g["H0"], i0, cfg.growth_end_fraction, cfg.min_fit_points)
         m_crit = value_at(t_s, mom[k], t_crit)
         rows.append({
