@@ -246,3 +246,10 @@ def test_incomplete_run_is_flagged(caplog):
     assert ds.attrs["run_complete"] == 0 and "failed" in ds.attrs["run_status"]
     assert "did not reach rest" in caplog.text
     assert monitor(strip_run()).attrs["run_complete"] == 1
+    # no rest time, but every particle below the critical speed at the end: the record is complete
+    run = strip_run(u_flow=0.05)
+    run["time_to_rest"] = run.time_to_rest.copy(data=np.nan)
+    assert monitor(run).attrs["run_complete"] == 1
+    run = strip_run(u_flow=0.5)
+    run["time_to_rest"] = run.time_to_rest.copy(data=np.nan)
+    assert monitor(run).attrs["run_complete"] == 0

@@ -65,7 +65,11 @@ def _geometry(run: xr.Dataset, cfg: MonitorConfig) -> dict:
         raise ConfigError(f"x_inf: must be > L0 = {g['L0']} m (got {x_inf!r}); the sections span [L0, x_inf]")
     time_to_rest = float(run["time_to_rest"]) if "time_to_rest" in run.variables else math.nan
     status = str(run.attrs.get("status", ""))
-    complete = math.isfinite(time_to_rest) and not status.lower().startswith("failed")
+    # the deposition record is complete once the run rested, or once every particle is deposited
+    # by our own criterion (|v| < critical_speed) in the last frame
+    last_speed = np.hypot(np.asarray(run["u"].values[-1], float), np.asarray(run["v"].values[-1], float))
+    all_deposited = bool(np.all(last_speed[np.isfinite(last_speed)] < cfg.critical_speed))
+    complete = (math.isfinite(time_to_rest) or all_deposited) and not status.lower().startswith("failed")
     if not complete and cfg.x_inf is None:
         LOG.warning("run %s did not reach rest (status: %s; time_to_rest = %s): x_inf = final_front_position "
                     "= %.4f m is not the final runout and late onsets are cut off", run.attrs.get("case", "?"),
