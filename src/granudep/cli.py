@@ -61,7 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("cases", help="list the paper's named cases (Tables 1 and 5)")
     p.set_defaults(func=_cmd_cases)
     p = sub.add_parser("warmup", help="compile and cache the numba kernels (run once before parallel jobs)")
-    p.add_argument("stages", nargs="*", default=["da", "isph"], choices=["da", "isph"])
+    p.add_argument("stages", nargs="*", default=["da", "isph", "monitor"], choices=["da", "isph", "monitor"])
     p.add_argument("--touch", metavar="FILE", help="write this flag file when done (Snakemake target)")
     p.set_defaults(func=_cmd_warmup)
     p = sub.add_parser("verify", help="run a stage's analytic verification suite and write a CSV table")
