@@ -25,7 +25,7 @@ class Geometry:
     L0: float = param(0.2, gt=0.0, le=5.0, unit="m", doc="column length (gate at x = L0)")
     H0: float = param(0.14, gt=0.0, le=5.0, unit="m", doc="column height")
     domain_length: float | None = param(None, gt=0.0, unit="m",
-                                        doc="bed length from the back wall; null = L0 + max(2.5 m, 15 H0)")
+                                        doc="bed length from the back wall; null = L0 + max(4 m, 20 H0)")
     back_wall: bool = param(True, doc="rigid wall at x = 0 (column collapse); false for periodic layers")
     periodic_length: float = param(0.0, ge=0.0, unit="m",
                                    doc="> 0: periodic in x with this period (layer tests; no back wall)")
@@ -107,8 +107,11 @@ class Numerics:
     free_surface_pressure: str = param("half_layer", choices=("half_layer", "zero"),
                                        doc="Dirichlet value on free-surface particles: rho g cos(theta) dx/2 or 0")
     kernel_completion: bool = param(True, doc="PPE: missing neighbours next to the free surface count as p = 0")
-    pressure_solver: str = param("direct", choices=("direct", "cg"),
+    pressure_solver: str = param("cg", choices=("direct", "cg"),
                                  doc="PPE: SuperLU factorisation or Jacobi-preconditioned CG (warm start)")
+    viscous_solver: str = param("cg", choices=("direct", "cg"),
+                                doc="implicit viscous step: SuperLU or Jacobi-preconditioned CG (warm start)")
+    solver_rtol: float = param(1.0e-8, gt=0.0, lt=1.0, unit="1", doc="CG relative residual tolerance")
     max_steps: int = param(2_000_000, gt=0, doc="hard cap on the number of time steps")
 
 
@@ -117,7 +120,8 @@ class Output:
     interval: float = param(0.01, gt=0.0, unit="s", doc="snapshot interval")
     front_depth_threshold: float | None = param(None, gt=0.0, unit="m",
                                                 doc="front: first cell thinner than this; null = 2 d")
-    rest_speed: float = param(0.01, gt=0.0, unit="m s-1", doc="at rest when max particle speed < rest_speed ...")
+    rest_speed: float = param(0.01, gt=0.0, unit="m s-1",
+                              doc="at rest when the max speed of the particles behind the front < rest_speed ...")
     rest_duration: float = param(0.1, gt=0.0, unit="s", doc="... for this long")
     stop_at_rest: bool = param(True, doc="end the run once at rest")
     progress_s: float = param(5.0, gt=0.0, unit="s", doc="wall seconds between progress lines")
@@ -168,7 +172,7 @@ class IsphConfig:
         g = self.geometry
         if g.periodic_length > 0:
             return g.periodic_length
-        return g.domain_length if g.domain_length is not None else g.L0 + max(2.5, 15.0 * g.H0)
+        return g.domain_length if g.domain_length is not None else g.L0 + max(4.0, 20.0 * g.H0)
 
     @property
     def front_depth_threshold(self) -> float:

@@ -63,7 +63,7 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
         "mu_2": float(m.mu_2), "I0": float(m.I0), "front_depth_threshold": float(cfg.front_depth_threshold),
         "rheology": cfg.rheology.model, "wall_slip": cfg.wall.slip, "t_c": float(cfg.t_c),
         "domain_length": float(cfg.domain_length), "n_particles": int(nf), "n_steps": int(st.steps),
-        "wall_time_s": float(st.wall_s),
+        "wall_time_s": float(st.wall_s), "wall_clamps": int(st.clamped),
         "ms_per_step": float(1e3 * st.wall_s / st.steps) if st.steps else float("nan"),
         "time_to_rest_norm": float(time_to_rest / cfg.t_c) if math.isfinite(time_to_rest) else float("nan"),
     })

@@ -101,7 +101,9 @@ def geometry_terms(start, nbr, rx, ry, rr, nf, h, vol):
         m_xx[i] = mxx
         m_yy[i] = myy
         det = mxx * myy - mxy * mxy
-        if det > 0.1 and mxx > 0.0 and myy > 0.0:
+        # renormalise only where the support is at least about half full (det M ≈ 1 for a full
+        # support, 0.5 next to a flat surface); sparse neighbourhoods would amplify noise
+        if det > 0.4 and mxx > 0.4 and myy > 0.4:
             lmat[i, 0] = myy / det
             lmat[i, 1] = -mxy / det
             lmat[i, 2] = -mxy / det
@@ -478,3 +480,28 @@ def shifting(nf, gcx, gcy, u, v, fs, h, dt, coeff, dx):
         sx[i] = ax
         sy[i] = ay
     return sx, sy
+
+
+@njit(cache=True)
+def clamp_to_walls(nf, x, y, u, v, planes, dmin, lo, hi):
+    """Safeguard against wall penetration: a particle closer than ``dmin`` to a wall plane (within
+    the wall's extent [lo, hi] along it) is put back at ``dmin`` and loses its velocity into the
+    wall. Returns the number of particles moved (reported in the run statistics)."""
+    moved = 0
+    for i in range(nf):
+        for q in range(planes.shape[0]):
+            nx = planes[q, 0]
+            ny = planes[q, 1]
+            along = -ny * x[i] + nx * y[i]
+            if along < lo[q] or along > hi[q]:
+                continue
+            d = nx * x[i] + ny * y[i] - planes[q, 2]
+            if d < dmin:
+                x[i] += (dmin - d) * nx
+                y[i] += (dmin - d) * ny
+                un = u[i] * nx + v[i] * ny
+                if un < 0.0:
+                    u[i] -= un * nx
+                    v[i] -= un * ny
+                moved += 1
+    return moved

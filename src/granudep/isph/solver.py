@@ -60,6 +60,9 @@ class SolverStats:
     t_visc: float = 0.0
     t_ppe: float = 0.0
     ppe_iters: int = 0
+    visc_iters: int = 0
+    clamped: int = 0
+    fallbacks: int = 0
 
 
 def _solve_direct(indptr, indices, data, rhss):
@@ -112,6 +115,9 @@ class IsphSolver:
         self.mean = ph.MEAN_CODES[c.rheology.pair_mean]
         planes = [(0.0, 1.0, 0.0)] + ([(1.0, 0.0, 0.0)] if c.geometry.back_wall else [])
         self.planes = np.array(planes, dtype=float)
+        # extent of each wall along its tangent t = (-n_y, n_x): bed x in [0, L], back wall y >= 0
+        self.plane_lo = np.array([-math.inf] + ([0.0] if c.geometry.back_wall else []))
+        self.plane_hi = np.array([math.inf] + ([math.inf] if c.geometry.back_wall else []))
         self.u_eps = c.wall.stick_speed
         self.mu_wall = math.tan(math.radians(c.wall.phi_wall_deg))
         self.t = 0.0
@@ -168,10 +174,14 @@ class IsphSolver:
             ph.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall, self.gx,
                                  self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v)
             data[indptr[:-1]] = diag_u
-        us = _solve_direct(indptr, indices, data, [self.u + dt * self.gx])[0]
         data_v = data.copy()
         data_v[indptr[:-1]] = diag_v
-        vs = _solve_direct(indptr, indices, data_v, [self.v + dt * self.gy])[0]
+        if c.numerics.viscous_solver == "direct":
+            us = _solve_direct(indptr, indices, data, [self.u + dt * self.gx])[0]
+            vs = _solve_direct(indptr, indices, data_v, [self.v + dt * self.gy])[0]
+        else:
+            us = self._solve_cg(indptr, indices, data, self.u + dt * self.gx, self.u + dt * self.gx, "visc")
+            vs = self._solve_cg(indptr, indices, data_v, self.v + dt * self.gy, self.v + dt * self.gy, "visc")
         t3 = _time.perf_counter()
         div = ph.divergence(start, nbr, rx, ry, rr, nf, h, vol, us, vs)
         unknown = np.full(nf, -1, np.int64)
@@ -192,7 +202,7 @@ class IsphSolver:
         # support the full inverse mixes the wall-normal pressure gradient into the tangential one
         lmat_p = lmat.copy()
         mxx, myy = mdiag
-        fsd = self.fs & (mxx > 0.1) & (myy > 0.1)
+        fsd = self.fs & (mxx > 0.4) & (myy > 0.4)
         lmat_p[self.fs] = (1.0, 0.0, 0.0, 1.0)
         lmat_p[fsd, 0] = 1.0 / mxx[fsd]
         lmat_p[fsd, 3] = 1.0 / myy[fsd]
@@ -205,6 +215,8 @@ class IsphSolver:
         self.y[:nf] += dt * self.v + sy
         if self.period > 0:
             self.x[:nf] %= self.period
+        self.stats.clamped += ph.clamp_to_walls(nf, self.x, self.y, self.u, self.v, self.planes, 0.25 * self.dx,
+                                                self.plane_lo, self.plane_hi)
         self._last_us = (us, vs, dt)
         self.t += dt
         self.step_no += 1
@@ -220,18 +232,26 @@ class IsphSolver:
     def _solve_ppe(self, indptr, indices, data, rhs, guess):
         if self.cfg.numerics.pressure_solver == "direct":
             return _solve_direct(indptr, indices, data, [rhs])[0]
+        return self._solve_cg(indptr, indices, data, rhs, guess, "ppe")
+
+    def _solve_cg(self, indptr, indices, data, rhs, guess, kind):
+        """Jacobi-preconditioned CG (scipy), warm-started; SuperLU if it does not converge."""
         n = indptr.size - 1
         a = sp.csr_matrix((data, indices, indptr), shape=(n, n))
-        dinv = 1.0 / a.diagonal()
+        dinv = 1.0 / data[indptr[:-1]]  # the kernels put the diagonal first in each row
         m = spla.LinearOperator((n, n), matvec=lambda z: dinv * z)
         it = [0]
 
         def cb(_):
             it[0] += 1
-        sol, info = spla.cg(a, rhs, x0=guess, rtol=1e-8, atol=0.0, maxiter=5000, M=m, callback=cb)
-        self.stats.ppe_iters += it[0]
+        sol, info = spla.cg(a, rhs, x0=guess, rtol=self.cfg.numerics.solver_rtol, atol=0.0, maxiter=1000, M=m,
+                            callback=cb)
+        if kind == "ppe":
+            self.stats.ppe_iters += it[0]
+        else:
+            self.stats.visc_iters += it[0]
         if info != 0:
-            LOG.warning("PPE CG did not converge (info=%d) at t=%.4f; falling back to SuperLU", info, self.t)
+            self.stats.fallbacks += 1
             return _solve_direct(indptr, indices, data, [rhs])[0]
         return sol
 
@@ -253,6 +273,15 @@ class IsphSolver:
     # ------------------------------------------------------------------------------------------
     def kinetic_energy(self) -> float:
         return float(0.5 * self.rho * self.vol * np.sum(self.u ** 2 + self.v ** 2))
+
+    def mass_speed(self, front: float) -> float:
+        """Maximum speed of the granular particles behind the front (x <= front)."""
+        if not math.isfinite(front):
+            return self.max_speed()
+        sel = self.x[:self.nf] <= front
+        if not sel.any():
+            return self.max_speed()
+        return float(np.sqrt(np.max(self.u[sel] ** 2 + self.v[sel] ** 2)))
 
     def max_speed(self) -> float:
         return float(np.sqrt(np.max(self.u ** 2 + self.v ** 2))) if self.nf else 0.0
@@ -327,18 +356,20 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
             s.dt = dt
             s.step(dt)
             s.stats.wall_s = _time.perf_counter() - wall0
-            vmax = s.max_speed()
-            if vmax > 10.0 * out.rest_speed or s.t > 5.0 * cfg.t_c:
-                started = True
-            if started and vmax < out.rest_speed:
-                if rest_since is None:
-                    rest_since = s.t
-            else:
-                rest_since = None
             if s.t >= next_out - tol:
                 snap()
                 next_out += out.interval
                 progress(message)
+                # rest: the granular mass behind the front (detached particles ahead of it, which
+                # slide on under Coulomb friction, do not count) moves slower than rest_speed
+                vmax = s.mass_speed(snaps.front[-1])
+                if vmax > 10.0 * out.rest_speed or s.t > 5.0 * cfg.t_c:
+                    started = True
+                if started and vmax < out.rest_speed:
+                    if rest_since is None:
+                        rest_since = s.t
+                else:
+                    rest_since = None
                 if rest_since is not None and s.t - rest_since >= out.rest_duration - tol:
                     time_to_rest = rest_since
                     if out.stop_at_rest:
