@@ -275,13 +275,11 @@ class IsphSolver:
         return float(0.5 * self.rho * self.vol * np.sum(self.u ** 2 + self.v ** 2))
 
     def mass_speed(self, front: float) -> float:
-        """Maximum speed of the granular particles behind the front (x <= front)."""
-        if not math.isfinite(front):
-            return self.max_speed()
-        sel = self.x[:self.nf] <= front
+        """Root-mean-square speed of the granular particles behind the front (x <= front)."""
+        sel = self.x[:self.nf] <= front if math.isfinite(front) else np.ones(self.nf, bool)
         if not sel.any():
-            return self.max_speed()
-        return float(np.sqrt(np.max(self.u[sel] ** 2 + self.v[sel] ** 2)))
+            sel = np.ones(self.nf, bool)
+        return float(np.sqrt(np.mean(self.u[sel] ** 2 + self.v[sel] ** 2)))
 
     def max_speed(self) -> float:
         return float(np.sqrt(np.max(self.u ** 2 + self.v ** 2))) if self.nf else 0.0
@@ -360,8 +358,8 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
                 snap()
                 next_out += out.interval
                 progress(message)
-                # rest: the granular mass behind the front (detached particles ahead of it, which
-                # slide on under Coulomb friction, do not count) moves slower than rest_speed
+                # rest: the rms speed of the granular mass behind the front (detached particles
+                # ahead of it, which slide on under Coulomb friction, do not count) < rest_speed
                 vmax = s.mass_speed(snaps.front[-1])
                 if vmax > 10.0 * out.rest_speed or s.t > 5.0 * cfg.t_c:
                     started = True
