@@ -40,6 +40,10 @@ N_FIELDS = 5
  P_MAXSTEPS, P_BED) = range(28)
 N_PARAMS = 28
 
+# fast-math for the pair passes WITHOUT 'reassoc': re-associated (vectorised) sums depend on the
+# alignment of the pair buffer and made two identical runs differ in the last bit.
+FASTMATH = {"nsz", "arcp", "contract", "afn"}
+
 # the Shepard sum of eq 22 is floored: a nearly emptied particle (deposition) at the edge of a full
 # particle's kernel has Σ V_j/h_j W_ij ≪ 1, and dividing by it gave accelerations of ~100 m/s² that
 # shot such particles out of the domain. Full or half support gives Σ ≈ 1 or ≥ 0.5: unaffected.
@@ -49,7 +53,7 @@ SHEPARD_FLOOR = 0.5
 RUNNING, AT_REST, NONFINITE, ESCAPED, MAX_STEPS = 0, 1, 2, 3, 4
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True, fastmath=FASTMATH)
 def depth_pass(xe, Ve, m, n, lo, hi, L, norm, qc, h, nd, E):
     """Eq 20, h_i = Σ_j V_j W_ij, and the number density Σ_j W_ij over particles with volume.
     Stores e^{−q²} of every pair in E (window of i at E[lo_i − lo_0 + …], see ``pair_offsets``)
@@ -75,7 +79,7 @@ def depth_pass(xe, Ve, m, n, lo, hi, L, norm, qc, h, nd, E):
         nd[i] = c
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True, fastmath=FASTMATH)
 def gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, E, dhdx, dudx, xsph):
     """Eqs 21–22 (∂h/∂x), eqs 28–29 (∂u/∂x, eq 29's sign corrected) and the XSPH sum of eq 33.
 
