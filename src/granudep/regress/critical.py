@@ -93,7 +93,12 @@ def growth_fit(t_s, h_D_norm, i_onset: int, end_fraction: float, min_points: int
     slope, intercept, r2, n = linear_fit(t_s[sl][keep], hd[sl][keep])
     if n < min_points or not slope > 0:
         return math.nan, math.nan, math.nan, n
-    return slope, -intercept / slope, r2, n
+    t_fit = -intercept / slope
+    # The Fig-9 intercept is a reading of the onset: it must fall inside the record, before the end
+    # of the fitted growth phase. A nearly flat fit extrapolates to absurd times (seen: t_s = -429).
+    if not (t_s[0] <= t_fit <= t_s[j]):
+        t_fit = math.nan
+    return slope, t_fit, r2, n
 
 
 def value_at(t_s, series, t: float) -> float:
