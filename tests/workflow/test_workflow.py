@@ -77,8 +77,12 @@ def test_ci_profile_runs_the_whole_chain_small(workdir):
     assert jobs["regress"] == jobs["reference"] == jobs["compare"] == jobs["summary"] == 1
     assert {f"figure_{f}" for f in FIGURES} <= set(jobs)
     assert "granudep isph T22-A70 --dx 0.01" in out and "granudep isph T16-A50 --dx 0.01" in out
-    # the DA run with deposition uses the A, B our regression computed
-    assert "--ab-source computed --coefficients results/regression/coefficients.csv" in out
+    # the DA run with deposition takes A, B from the source the CI config names
+    ci = yaml.safe_load((workdir / "config/ci.yaml").read_text())
+    src = ci["da"]["ab_source"]
+    expected = ("--ab-source computed --coefficients results/regression/coefficients.csv"
+                if src == "computed" else "--ab-source paper")
+    assert f"granudep da 1D-A70 {expected} --n-particles 200" in out
     assert "granudep verify isph --quick" in out
 
 
