@@ -88,6 +88,12 @@ class Wall:
                                 doc="Coulomb wall friction angle phi_B (slip = coulomb)")
     stick_speed: float = param(1.0e-4, gt=0.0, unit="m s-1",
                                doc="Coulomb regularisation: below this tangential speed the wall friction is a stiff drag")
+    contact_length: str = param("voronoi", choices=("voronoi", "dx"),
+                                doc="bed length carried by a contact particle in the Coulomb friction: "
+                                    "half the spacing to its contact neighbours (voronoi) or dx")
+    cover_offset: float = param(0.5, gt=0.0, le=2.0, unit="dx",
+                                doc="a particle is not in wall contact when another lies below it within "
+                                    "this tangential offset (in dx)")
     layers: int = param(0, ge=0, le=8, doc="wall particle layers; 0 = enough to cover the kernel support 2h")
 
 

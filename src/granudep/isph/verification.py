@@ -13,7 +13,7 @@ import pandas as pd
 
 from ..cases import G
 from .config import load_config
-from .solver import IsphSolver
+from .solver import IsphSolver, step_towards
 
 COLUMNS = ["check", "quantity", "value", "reference", "error", "tolerance", "passed", "note"]
 
@@ -37,7 +37,7 @@ def layer_config(theta_deg: float, height: float, dx: float, width_cells: int = 
 
 def advance(s: IsphSolver, t_end: float) -> IsphSolver:
     while s.t < t_end - 1e-12:
-        dt = min(s.time_step(), t_end - s.t)
+        dt = step_towards(s.time_step(), t_end - s.t)
         s.dt = dt
         s.step(dt)
     return s
