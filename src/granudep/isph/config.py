@@ -88,6 +88,12 @@ class Wall:
                                 doc="Coulomb wall friction angle phi_B (slip = coulomb)")
     stick_speed: float = param(1.0e-4, gt=0.0, unit="m s-1",
                                doc="Coulomb regularisation: below this tangential speed the wall friction is a stiff drag")
+    contact_length: str = param("voronoi", choices=("voronoi", "dx"),
+                                doc="bed length carried by a contact particle in the Coulomb friction: "
+                                    "half the spacing to its contact neighbours (voronoi) or dx")
+    cover_offset: float = param(0.5, gt=0.0, le=2.0, unit="dx",
+                                doc="a particle is not in wall contact when another lies below it within "
+                                    "this tangential offset (in dx)")
     layers: int = param(0, ge=0, le=8, doc="wall particle layers; 0 = enough to cover the kernel support 2h")
 
 
@@ -120,8 +126,12 @@ class Output:
     interval: float = param(0.01, gt=0.0, unit="s", doc="snapshot interval")
     front_depth_threshold: float | None = param(None, gt=0.0, unit="m",
                                                 doc="front: first cell thinner than this; null = 2 d")
-    rest_speed: float = param(0.05, gt=0.0, unit="m s-1",
-                              doc="at rest when the rms speed of the particles behind the front < rest_speed ...")
+    rest_speed: float = param(0.1, gt=0.0, unit="m s-1",
+                              doc="at rest when the speed (rest_measure) of the particles behind the front < "
+                                  "rest_speed (default: the paper's flow/deposit speed 0.1 m/s) ...")
+    rest_measure: str = param("max", choices=("max", "rms"),
+                              doc="... taking the max over all particles (every particle deposited) or the rms "
+                                  "speed of those behind the front ...")
     rest_duration: float = param(0.1, gt=0.0, unit="s", doc="... for this long")
     stop_at_rest: bool = param(True, doc="end the run once at rest")
     progress_s: float = param(5.0, gt=0.0, unit="s", doc="wall seconds between progress lines")

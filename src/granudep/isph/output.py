@@ -44,7 +44,7 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
             "step": var(np.asarray(snaps.steps, np.int64), ("time",), "1", "time steps taken"),
             "final_front_position": var(final_front, (), "m", "front position at the end of the run"),
             "time_to_rest": var(float(time_to_rest), (), "s",
-                                "start of the first window of rest_duration with rms speed of the mass < rest_speed"),
+                                "start of the first window of rest_duration with the max (rest_measure) speed of the mass < rest_speed"),
         },
         coords={
             "time": var(t, ("time",), "s", "time since gate removal"),
