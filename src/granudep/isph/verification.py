@@ -124,12 +124,18 @@ def collapse_t22a70(quick: bool = False) -> list[dict]:
     dx = 0.008 if quick else 0.004
     ds = run_isph("T22-A70", dx=dx, progress_s=60.0)
     fp = failure_plane_angle(ds, t_norm=1.0)
+    # Rankine's 45° + φ/2 is measured from the horizontal (vertical major principal stress); our
+    # frame is slope-aligned, so the plane's angle from the horizontal is its angle from the bed + θ.
+    theta_deg = float(ds.attrs["theta_deg"])
+    angle_horizontal = fp["angle_deg"] + theta_deg
     rankine = 45.0 + 0.5 * 25.5
     ts = float(ds.attrs["time_to_rest_norm"])
     runout = (float(ds.final_front_position) - 0.2) / 0.2
     return [
-        _row("collapse_T22-A70", "failure-plane angle [deg]", fp["angle_deg"], rankine, fp["angle_deg"] - rankine,
-             5.0, f"dx={dx}; at t = t_c, |u| > 0.1 m/s; paper's SPH 55.8 deg"),
+        _row("collapse_T22-A70", "failure-plane angle from the horizontal [deg]", angle_horizontal, rankine,
+             angle_horizontal - rankine, 5.0,
+             f"dx={dx}; at t = t_c, |u| > 0.1 m/s; {fp['angle_deg']:.1f} deg from the bed + theta; "
+             "paper's SPH 55.8 deg"),
         _row("collapse_T22-A70", "time to rest t/t_c", ts, 13.5, ts - 13.5, 3.0,
              f"status {ds.attrs['status']}; max speed of all particles < 0.1 m/s for 0.1 s"),
         _row("collapse_T22-A70", "runout (x_front - L0)/L0", runout, float("nan"), float("nan"), float("inf"),

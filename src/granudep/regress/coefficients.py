@@ -109,7 +109,9 @@ def _along_a(rows: pd.DataFrame, a: float, extrapolate: bool):
     av = rows.a.to_numpy(float)
     A = rows.A.to_numpy(float)
     B = rows.B.to_numpy(float)
-    if av[0] <= a <= av[-1]:
+    tol = 1e-9 * max(1.0, abs(a))  # a = H0/L0 in floating point (0.14/0.2 = 0.7000000000000001)
+    if av[0] - tol <= a <= av[-1] + tol:
+        a = min(max(a, av[0]), av[-1])
         return float(np.interp(a, av, A)), float(np.interp(a, av, B))
     if not extrapolate:
         return None
