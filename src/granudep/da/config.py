@@ -81,7 +81,7 @@ class Deposition:
     x_inf_mode: Literal["self-consistent", "no-deposition", "user"] = param("self-consistent")
     x_inf: float | None = param(None, gt=0.0, unit="m", doc="x∞ for x_inf_mode user (from the back wall)")
     x_inf_tol: float = param(5e-3, gt=0.0, unit="m", doc="bracket width at which the x∞ iteration stops")
-    x_inf_residual_tol: float = param(0.05, gt=0.0, le=1.0,
+    x_inf_residual_tol: float = param(0.02, gt=0.0, le=1.0,
                                       doc="max |x_front(x∞) − x∞| / (x∞ − L0) accepted")
     x_inf_max_iter: int = param(30, ge=1, le=200)
     clamp_x: bool = param(True, doc="clamp [x] to [0, 1], the range eq 36 was fitted on")
