@@ -38,11 +38,62 @@ def test_short_collapse_writes_the_contract(tmp_path):
 def test_blow_up_raises_with_time_step_position_and_keeps_partial_output(tmp_path):
     out = tmp_path / "escape.nc"
     with pytest.raises(IsphBlowUp, match=r"left the domain at t=.* step \d+: \(x, y\)"):
-        run_isph("T22-A70", output=out, dx=0.01, domain_length=0.21, t_end=1.0)
+        run_isph("T22-A70", output=out, dx=0.01, domain_length=0.21, t_end=1.0, **{"geometry.outflow": False})
     ds = xr.open_dataset(out)
     assert ds.attrs["status"].startswith("failed: particle")
     assert ds.sizes["time"] >= 1
     assert math.isnan(float(ds.time_to_rest))
+
+
+def test_downstream_outflow_removes_particles_and_is_not_a_blow_up(tmp_path, caplog):
+    # a bed 1 cm longer than the column: the collapsing front passes its end within 0.1 s
+    out = tmp_path / "outflow.nc"
+    with caplog.at_level("WARNING", logger="granudep"):
+        ds = run_isph("T22-A70", output=out, dx=0.01, domain_length=0.21, t_end=0.3)
+    ds = xr.open_dataset(out)
+    assert not ds.attrs["status"].startswith("failed")
+    n0 = ds.sizes["particle"]
+    assert n0 == 14 * 20 and ds.attrs["n_particles"] == n0
+    ot = ds.outflow_time.values
+    gone = np.isfinite(ot)
+    assert ds.attrs["n_outflow"] == gone.sum() > 0
+    assert ds.attrs["first_outflow_time"] == pytest.approx(ot[gone].min())
+    assert 0.0 < ot[gone].min() <= ot[gone].max() <= 0.3
+    assert any("left through the downstream outflow" in r.getMessage() for r in caplog.records)
+    t = ds.time.values
+    x, u, p = ds.x.values, ds.u.values, ds.pressure.values
+    for k in np.flatnonzero(gone):
+        before, after = t < ot[k] - 1e-12, t >= ot[k] - 1e-12
+        # in the domain before it left, frozen just past the end of the bed afterwards
+        assert np.all(x[before, k] <= 0.21 + 1e-6)
+        assert np.all(x[after, k] > 0.21 - 1e-6) and np.all(x[after, k] < 0.21 + 0.01)
+        assert np.all(np.diff(x[after, k]) == 0.0)
+        assert np.all(u[after, k] == 0.0) and np.all(p[after, k] == 0.0)
+    # every particle still in the domain at the end is inside [0, 0.21]
+    assert np.all(x[-1, ~gone] <= 0.21) and np.all(x[-1, ~gone] >= -0.005)
+
+
+def test_escape_through_bed_or_nan_is_still_a_blow_up():
+    from granudep.isph.config import load_config
+    from granudep.isph.solver import IsphSolver
+    cfg = load_config("T22-A70", dx=0.02, domain_length=0.3)
+    s = IsphSolver(cfg)
+    n0, walls = s.nf, s.x[s.nf:].copy()
+    # past the downstream end: leaves through the outflow, the rest (and every wall particle) stays
+    s.x[3] = 0.31
+    s._check()
+    assert s.nf == n0 - 1 and s.n_outflow == 1 and 3 not in s.ids
+    assert s.ids.size == s.u.size == s.p.size == s.fs.size == n0 - 1
+    assert np.array_equal(s.x[s.nf:], walls)
+    assert math.isfinite(s.outflow_time[3]) and s.exit_x[3] == 0.31
+    # through the bed: a blow-up naming the original particle index
+    s.y[s.nf - 1] = -0.5
+    with pytest.raises(IsphBlowUp, match=rf"particle {n0 - 1} left the domain at t=0\.00000 s, step 0"):
+        s._check()
+    s.y[s.nf - 1] = 0.01
+    s.u[0] = math.nan
+    with pytest.raises(IsphBlowUp, match=r"non-finite velocity/pressure at t=.* step 0, particle 0"):
+        s._check()
 
 
 def test_cli_bad_input_exits_2(capsys):

@@ -39,9 +39,13 @@ def run_config(cfg: IsphConfig, output: str | Path | None = None) -> xr.Dataset:
             LOG.error("isph %s failed; partial output (%d snapshots) kept in %s", cfg.case, ds.sizes["time"], output)
         raise
     ds = build_dataset(cfg, solver, snaps, status, ttr)
+    if ds.attrs["n_outflow"]:
+        LOG.warning("isph %s: %d particle(s) left through the downstream outflow at x = %.3f m between t=%.3f and "
+                    "%.3f s (frozen there in the snapshots; see outflow_time)", cfg.case, ds.attrs["n_outflow"],
+                    cfg.domain_length, ds.attrs["first_outflow_time"], ds.attrs["last_outflow_time"])
     LOG.info("isph %s: %s at t=%.3f s; time_to_rest=%.3f s (%.2f t_c), front=%.4f m, %d particles, %d steps, "
              "%.2f ms/step", cfg.case, status, solver.t, ttr, ttr / cfg.t_c, float(ds.final_front_position),
-             solver.nf, solver.stats.steps, ds.attrs["ms_per_step"])
+             solver.n0, solver.stats.steps, ds.attrs["ms_per_step"])
     if output is not None:
         write_netcdf(ds, output)
     return ds

@@ -29,6 +29,8 @@ class Geometry:
     back_wall: bool = param(True, doc="rigid wall at x = 0 (column collapse); false for periodic layers")
     periodic_length: float = param(0.0, ge=0.0, unit="m",
                                    doc="> 0: periodic in x with this period (layer tests; no back wall)")
+    outflow: bool = param(True, doc="the bed ends at x = domain_length in an open outflow: particles that pass "
+                                    "it leave the computation (counted, timed); false = a blow-up")
 
     def validate(self, prefix: str) -> None:
         p = f"{prefix}." if prefix else ""

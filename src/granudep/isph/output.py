@@ -13,7 +13,8 @@ from .config import IsphConfig
 
 def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: float) -> xr.Dataset:
     t = np.asarray(snaps.time, dtype=float)
-    nf = solver.nf
+    nf = getattr(solver, "n0", solver.nf)
+    out_t = np.asarray(getattr(solver, "outflow_time", np.full(nf, np.nan)), dtype=float)
     f = snaps.fields
 
     def stack(name, dtype):
@@ -42,6 +43,9 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
                                   "kinetic energy per unit width"),
             "max_speed": var(np.asarray(snaps.max_speed, float), ("time",), "m s-1", "maximum particle speed"),
             "step": var(np.asarray(snaps.steps, np.int64), ("time",), "1", "time steps taken"),
+            "outflow_time": var(out_t, ("particle",), "s",
+                                "time the particle left through the downstream outflow at x = domain_length "
+                                "(NaN: it stayed in the domain); from then on it is frozen where it left"),
             "final_front_position": var(final_front, (), "m", "front position at the end of the run"),
             "time_to_rest": var(float(time_to_rest), (), "s",
                                 "start of the first window of rest_duration with the max (rest_measure) speed of the mass < rest_speed"),
@@ -63,6 +67,10 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
         "mu_2": float(m.mu_2), "I0": float(m.I0), "front_depth_threshold": float(cfg.front_depth_threshold),
         "rheology": cfg.rheology.model, "wall_slip": cfg.wall.slip, "t_c": float(cfg.t_c),
         "domain_length": float(cfg.domain_length), "n_particles": int(nf), "n_steps": int(st.steps),
+        "outflow": int(bool(cfg.geometry.outflow)),
+        "n_outflow": int(np.isfinite(out_t).sum()),
+        "first_outflow_time": float(np.nanmin(out_t)) if np.isfinite(out_t).any() else float("nan"),
+        "last_outflow_time": float(np.nanmax(out_t)) if np.isfinite(out_t).any() else float("nan"),
         "wall_time_s": float(st.wall_s), "wall_clamps": int(st.clamped),
         "ms_per_step": float(1e3 * st.wall_s / st.steps) if st.steps else float("nan"),
         "time_to_rest_norm": float(time_to_rest / cfg.t_c) if math.isfinite(time_to_rest) else float("nan"),

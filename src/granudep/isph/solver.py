@@ -129,6 +129,16 @@ class IsphSolver:
         self.xmax = c.domain_length if self.period <= 0 else math.inf
         self.ymin = -0.5 * self.dx
         self.ymax = c.geometry.H0 + max(1.0, 5.0 * c.geometry.H0)
+        # downstream outflow: particles past x = xmax leave the computation (see _check); the
+        # state arrays then hold the n_active particles still in the domain, ``ids`` their
+        # original indices; snapshots keep all n0 particles (those gone frozen where they left)
+        self.outflow = bool(c.geometry.outflow) and self.period <= 0
+        self.n0 = nf
+        self.ids = np.arange(nf)
+        self.outflow_time = np.full(nf, np.nan)
+        self.exit_x = np.full(nf, np.nan)
+        self.exit_y = np.full(nf, np.nan)
+        self.outflow_log: list[tuple] = []      # (particle, t, step, y, speed) per departure
 
     # ------------------------------------------------------------------------------------------
     def time_step(self) -> float:
@@ -261,19 +271,73 @@ class IsphSolver:
         return sol
 
     def _check(self) -> None:
+        """NaN anywhere, or a particle through the bed, back wall or top: IsphBlowUp. A finite
+        particle past the downstream end of the bed (x > domain_length) with ``geometry.outflow``
+        leaves through the outflow (:meth:`_remove`), which is not a failure."""
         nf = self.nf
         bad = ~(np.isfinite(self.u) & np.isfinite(self.v) & np.isfinite(self.p))
         if bad.any():
             k = int(np.flatnonzero(bad)[0])
             raise IsphBlowUp(f"non-finite velocity/pressure at t={self.t:.5f} s, step {self.step_no}, "
-                             f"particle {k} at (x, y) = ({self.x[k]:.4f}, {self.y[k]:.4f}) m")
+                             f"particle {int(self.ids[k])} at (x, y) = ({self.x[k]:.4f}, {self.y[k]:.4f}) m")
         x, y = self.x[:nf], self.y[:nf]
+        inside_y = (y >= self.ymin) & (y <= self.ymax)
+        if self.outflow:
+            gone = (x > self.xmax) & np.isfinite(x) & inside_y
+            if gone.any():
+                self._remove(gone)
+                nf = self.nf
+                x, y = self.x[:nf], self.y[:nf]
         out = (x < self.xmin) | (x > self.xmax) | (y < self.ymin) | (y > self.ymax) | ~np.isfinite(x) | ~np.isfinite(y)
         if out.any():
             k = int(np.flatnonzero(out)[0])
-            raise IsphBlowUp(f"particle {k} left the domain at t={self.t:.5f} s, step {self.step_no}: "
+            x, y = x.copy(), y.copy()
+            k_id = int(self.ids[k])
+            raise IsphBlowUp(f"particle {k_id} left the domain at t={self.t:.5f} s, step {self.step_no}: "
                              f"(x, y) = ({x[k]:.4f}, {y[k]:.4f}) m outside x in [{self.xmin:.4f}, {self.xmax:.4f}],"
                              f" y in [{self.ymin:.4f}, {self.ymax:.4f}]")
+
+    def _remove(self, gone: np.ndarray) -> None:
+        """Take the granular particles ``gone`` (mask over the active ones) out of the computation:
+        they passed the downstream end of the bed. Their exit time and place are kept; the wall
+        particles (stored after the granular ones) are untouched."""
+        nf = self.nf
+        idx = np.flatnonzero(gone)
+        keep = ~gone
+        orig = self.ids[idx]
+        self.outflow_time[orig] = self.t
+        self.exit_x[orig] = self.x[idx]
+        self.exit_y[orig] = self.y[idx]
+        speed = np.hypot(self.u[idx], self.v[idx])
+        for k, i in enumerate(orig):
+            self.outflow_log.append((int(i), self.t, self.step_no, float(self.y[idx[k]]), float(speed[k])))
+            if len(self.outflow_log) <= 20:
+                LOG.warning("isph %s: particle %d left through the downstream outflow (x = %.3f m) at t=%.5f s, "
+                            "step %d, y = %.4f m, speed %.3f m/s", self.cfg.case, i, self.xmax, self.t,
+                            self.step_no, self.y[idx[k]], speed[k])
+            elif len(self.outflow_log) == 21:
+                LOG.warning("isph %s: further outflow departures are counted, not logged", self.cfg.case)
+        self.x = np.concatenate([self.x[:nf][keep], self.x[nf:]])
+        self.y = np.concatenate([self.y[:nf][keep], self.y[nf:]])
+        for name in ("u", "v", "p", "eta", "gdot", "fs", "p_rheo"):
+            a = getattr(self, name, None)
+            if a is not None and np.ndim(a) == 1 and a.size == nf:
+                setattr(self, name, a[keep])
+        self.ids = self.ids[keep]
+        self.nf = int(keep.sum())
+
+    def full(self, a: np.ndarray, fill: float = 0.0) -> np.ndarray:
+        """A per-particle array of the active particles spread over all n0 original particles
+        (``fill`` for those gone through the outflow)."""
+        if self.nf == self.n0:
+            return a
+        out = np.full(self.n0, fill, dtype=a.dtype)
+        out[self.ids] = a
+        return out
+
+    @property
+    def n_outflow(self) -> int:
+        return self.n0 - self.nf
 
     # ------------------------------------------------------------------------------------------
     def kinetic_energy(self) -> float:
@@ -281,6 +345,8 @@ class IsphSolver:
 
     def mass_speed(self, front: float, measure: str = "rms") -> float:
         """Max or root-mean-square speed of the granular particles behind the front (x <= front)."""
+        if self.nf == 0:
+            return 0.0
         sel = self.x[:self.nf] <= front if math.isfinite(front) else np.ones(self.nf, bool)
         if not sel.any():
             sel = np.ones(self.nf, bool)
@@ -340,16 +406,24 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
     tol = 1e-9
 
     def snap():
+        # every snapshot holds all n0 particles: those gone through the outflow sit where they left
+        # (x = domain length) at rest, with p = 0 and free_surface = 1
         nf = s.nf
         snaps.time.append(s.t)
         f = snaps.fields
-        f["x"].append(s.x[:nf].astype(np.float32))
-        f["y"].append(s.y[:nf].astype(np.float32))
-        f["u"].append(s.u.astype(np.float32))
-        f["v"].append(s.v.astype(np.float32))
-        f["pressure"].append(s.p.astype(np.float32))
-        f["viscosity"].append(s.eta.astype(np.float32))
-        f["free_surface"].append(s.fs.astype(np.int8))
+        xs, ys = s.x[:nf], s.y[:nf]
+        if nf < s.n0:
+            xs = s.exit_x.copy()
+            xs[s.ids] = s.x[:nf]
+            ys = s.exit_y.copy()
+            ys[s.ids] = s.y[:nf]
+        f["x"].append(xs.astype(np.float32))
+        f["y"].append(ys.astype(np.float32))
+        f["u"].append(s.full(s.u).astype(np.float32))
+        f["v"].append(s.full(s.v).astype(np.float32))
+        f["pressure"].append(s.full(s.p).astype(np.float32))
+        f["viscosity"].append(s.full(s.eta).astype(np.float32))
+        f["free_surface"].append(s.full(s.fs, True).astype(np.int8))
         snaps.front.append(s.front())
         snaps.kinetic.append(s.kinetic_energy())
         snaps.max_speed.append(s.max_speed())
@@ -374,6 +448,9 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
         while s.t < t_end - tol:
             if s.step_no >= cfg.numerics.max_steps:
                 status = f"max_steps ({cfg.numerics.max_steps}) reached"
+                break
+            if s.nf == 0:
+                status = "every particle left through the outflow"
                 break
             dt = s.time_step()
             dt = step_towards(dt, min(next_out, t_end) - s.t)
