@@ -198,7 +198,7 @@ class IsphSolver:
             us = self._solve_cg(indptr, indices, data, self.u + dt * self.gx, self.u + dt * self.gx, "visc")
             vs = self._solve_cg(indptr, indices, data_v, self.v + dt * self.gy, self.v + dt * self.gy, "visc")
         t3 = _time.perf_counter()
-        div = ph.divergence(start, nbr, rx, ry, rr, nf, h, vol, us, vs)
+        div = ph.divergence(start, nbr, rx, ry, rr, nf, h, vol, us, vs, lmat)
         unknown = np.full(nf, -1, np.int64)
         interior = ~self.fs
         n_unknown = int(interior.sum())
@@ -225,7 +225,8 @@ class IsphSolver:
                                         dt, rho, detached)
         self.u = us - dt / rho * gpx
         self.v = vs - dt / rho * gpy
-        sx, sy = ph.shifting(nf, gcx, gcy, self.u, self.v, self.fs, h, dt, c.numerics.shifting, self.dx)
+        ncx, ncy = ph.smoothed_gradient(start, nbr, rr, nf, h, vol, gcx, gcy)
+        sx, sy = ph.shifting(nf, gcx, gcy, self.u, self.v, self.fs, h, dt, c.numerics.shifting, self.dx, ncx, ncy)
         self.x[:nf] += dt * self.u + sx
         self.y[:nf] += dt * self.v + sy
         if self.period > 0:

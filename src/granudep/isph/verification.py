@@ -98,22 +98,38 @@ def sliding_block(quick: bool = False) -> list[dict]:
 def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     """Steady uniform μ(I) flow down a periodic incline (no-slip bed): Bagnold profile
     u(y) = (2/3)(I_θ/d) sqrt(φ g cosθ) [h^{3/2} − (h−y)^{3/2}], I_θ = I0 (tanθ − μ_s)/(μ_2 − tanθ).
-    Target L2 ≤ 3 % (issue 3)."""
-    dx = 0.002 if quick else 0.001
+
+    The layer starts from the analytic profile (from rest the flow needs ~5 s to develop: its
+    relaxation time is u_s/(g cosθ μ'(I_θ) I_θ) ≈ 2 s) and runs 1 s, many viscous times h²/ν of the
+    layer, into the solver's own steady state; the error is the relative L2 error of the particle
+    velocities averaged over the last 0.25 s. The test is severe: μ(I) is flat (d ln μ/d ln I ≈ 0.1
+    at I_θ), so a 1 % error in the shear stress or the pressure moves the shear rate by ~10 %.
+    Target L2 ≤ 3 % (issue 3). Measured (lead, session 2): 12 % at dx = 2 mm, 6.8 % at 1 mm,
+    4.7 % at 0.5 mm (first order: the error sits in the top three particle layers, where p → 0)."""
+    dx = 0.001 if quick else 0.0005
     h = 0.02
-    t_end = 1.0 if quick else 2.0
+    t_end, t_avg = 1.0, 0.25
     cfg = load_config(layer_config(theta_deg, h, dx, wall={"slip": "no_slip"}))
     m = cfg.material
     th = math.radians(theta_deg)
     i_th = m.I0 * (math.tan(th) - m.mu_s) / (m.mu_2 - math.tan(th))
-    s = advance(IsphSolver(cfg), t_end)
-    y = s.y[:s.nf]
-    hh = h
-    ub = (2.0 / 3.0) * (i_th / m.d) * math.sqrt(m.rho / m.rho_s * G * math.cos(th)) * (
-        hh ** 1.5 - np.clip(hh - y, 0.0, None) ** 1.5)
-    err = float(np.sqrt(np.mean((s.u - ub) ** 2) / np.mean(ub ** 2)))
+
+    def profile(y):
+        return (2.0 / 3.0) * (i_th / m.d) * math.sqrt(m.rho / m.rho_s * G * math.cos(th)) * (
+            h ** 1.5 - np.clip(h - y, 0.0, None) ** 1.5)
+
+    s = IsphSolver(cfg)
+    s.u[:] = profile(s.y[:s.nf])
+    errs, means = [], []
+    for t in np.arange(t_end - t_avg, t_end + 1e-9, 0.05):
+        advance(s, float(t))
+        ub = profile(s.y[:s.nf])
+        errs.append(float(np.sqrt(np.mean((s.u - ub) ** 2) / np.mean(ub ** 2))))
+        means.append(float(np.mean(s.u) / np.mean(ub)))
+    err = float(np.mean(errs))
     return [_row("bagnold", "relative L2 error of u(y)", err, 0.0, err, 0.03,
-                 f"theta={theta_deg} deg, I_theta={i_th:.3f}, h={h} m, dx={dx}, t={t_end} s, no-slip bed")]
+                 f"theta={theta_deg} deg, I_theta={i_th:.3f}, h={h} m, dx={dx}, no-slip bed; mean over "
+                 f"t = {t_end - t_avg:.2f}..{t_end} s; mean u / analytic = {means[-1]:.3f}")]
 
 
 def collapse_t22a70(quick: bool = False) -> list[dict]:
