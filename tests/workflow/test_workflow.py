@@ -103,6 +103,11 @@ def test_slurm_profile_dry_runs(workdir):
     rc, out, jobs = dry_run(workdir, "--profile", "profiles/slurm")
     assert rc == 0, out
     assert jobs["isph_run"] == len(TABLE1) + len(TABLE5_GEOMETRIES)
+    # the profile's set-threads reach the 2D runs (without `cores` Snakemake scales them down to
+    # the submitting node's core count) and SLURM is asked for as many CPUs
+    isph = re.findall(r"NUMBA_NUM_THREADS=(\d+) granudep isph ", out)
+    assert len(isph) == jobs["isph_run"] and set(isph) == {"4"}
+    assert out.count("cpus_per_task=4") >= jobs["isph_run"]
 
 
 @pytest.mark.parametrize("target, rule, count", [
