@@ -33,6 +33,10 @@ def test_short_collapse_writes_the_contract(tmp_path):
     assert ds.front_position[-1] > 0.2
     assert ds.kinetic_energy[-1] > 0
     assert ds.x.dtype == np.float32 and ds.free_surface.dtype == np.int8
+    # bulk volume: the lattice fills exactly N dx^2; the first 0.1 s of collapse keeps it within 2 %
+    assert float(ds.area_ratio[0]) == pytest.approx(1.0, abs=1e-12)
+    assert float(ds.area_ratio.min()) > 0.98
+    assert ds.attrs["final_area_ratio"] == pytest.approx(float(ds.area_ratio[-1]))
 
 
 def test_blow_up_raises_with_time_step_position_and_keeps_partial_output(tmp_path):

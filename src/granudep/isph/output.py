@@ -41,6 +41,8 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
                                   "front position from the back wall (first bed cell thinner than threshold)"),
             "kinetic_energy": var(np.asarray(snaps.kinetic, float), ("time",), "J m-1",
                                   "kinetic energy per unit width"),
+            "area_ratio": var(np.asarray(snaps.area, float), ("time",), "1",
+                              "area under the binned free surface / (N dx^2) (bulk volume conservation; 1 = exact)"),
             "max_speed": var(np.asarray(snaps.max_speed, float), ("time",), "m s-1", "maximum particle speed"),
             "step": var(np.asarray(snaps.steps, np.int64), ("time",), "1", "time steps taken"),
             "outflow_time": var(out_t, ("particle",), "s",
@@ -72,6 +74,7 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
         "first_outflow_time": float(np.nanmin(out_t)) if np.isfinite(out_t).any() else float("nan"),
         "last_outflow_time": float(np.nanmax(out_t)) if np.isfinite(out_t).any() else float("nan"),
         "wall_time_s": float(st.wall_s), "wall_clamps": int(st.clamped),
+        "final_area_ratio": float(snaps.area[-1]) if snaps.area else float("nan"),
         "ms_per_step": float(1e3 * st.wall_s / st.steps) if st.steps else float("nan"),
         "time_to_rest_norm": float(time_to_rest / cfg.t_c) if math.isfinite(time_to_rest) else float("nan"),
     })

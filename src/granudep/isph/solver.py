@@ -47,6 +47,7 @@ class Snapshots:
                                                   ("x", "y", "u", "v", "pressure", "viscosity", "free_surface")})
     front: list = field(default_factory=list)
     kinetic: list = field(default_factory=list)
+    area: list = field(default_factory=list)
     max_speed: list = field(default_factory=list)
     steps: list = field(default_factory=list)
 
@@ -379,6 +380,24 @@ def step_towards(dt: float, remaining: float) -> float:
 
 
 def front_position(x: np.ndarray, y: np.ndarray, dx: float, threshold: float, length: float) -> float:
+    edges, depth = surface_profile(x, y, dx, length)
+    return front_from_profile(edges, depth, threshold)
+
+
+def area_ratio(x: np.ndarray, y: np.ndarray, dx: float, length: float) -> float:
+    """Area under the binned surface profile / (N dx²): the bulk-volume conservation measure of the
+    run (1 = the particles fill exactly their volume; < 1 = the mass compressed or particles
+    clumped). Each particle carries dx², so mass is conserved by construction; this is the error
+    of the incompressibility constraint (thin layers, where every particle is a free-surface
+    particle without a pressure equation, are where it is lost)."""
+    if x.size == 0:
+        return float("nan")
+    edges, depth = surface_profile(x, y, dx, length)
+    return float(depth.sum() * dx / (x.size * dx * dx))
+
+
+def surface_profile(x: np.ndarray, y: np.ndarray, dx: float, length: float):
+    """Bed cells of width dx (edges) and the depth of the granular mass in each: max y + dx/2."""
     ncell = int(math.ceil(length / dx)) + 1
     edges = np.arange(ncell + 1) * dx
     idx = np.clip((x / dx).astype(np.int64), 0, ncell - 1)
@@ -390,7 +409,7 @@ def front_position(x: np.ndarray, y: np.ndarray, dx: float, threshold: float, le
     left = np.maximum(np.concatenate([[0.0], depth[:-1]]), np.concatenate([[0.0, 0.0], depth[:-2]]))
     right = np.maximum(np.concatenate([depth[1:], [0.0]]), np.concatenate([depth[2:], [0.0, 0.0]]))
     depth = np.where(depth > 0.0, depth, np.minimum(left, right))
-    return front_from_profile(edges, depth, threshold)
+    return edges, depth
 
 
 def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, solver: IsphSolver | None = None):
@@ -427,6 +446,7 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
         f["free_surface"].append(s.full(s.fs, True).astype(np.int8))
         snaps.front.append(s.front())
         snaps.kinetic.append(s.kinetic_energy())
+        snaps.area.append(area_ratio(s.x[:nf], s.y[:nf], s.dx, cfg.domain_length))
         snaps.max_speed.append(s.max_speed())
         snaps.steps.append(s.step_no)
         if on_snapshot is not None:
