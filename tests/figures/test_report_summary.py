@@ -44,13 +44,16 @@ def test_summary_numbers_from_files(inputs):
     assert "1 of 2 checks within tolerance" in text and "**NO**" in text
     assert "| isph/T22-A70 | 123.4 | 457 |" in text
     assert "[fig5_free_surface.png](figures/fig5_free_surface.png)" in text
-    assert "Not available" not in text
+    # only the two studies beyond the paper (separate targets) were not given
+    assert text.count("Not available") == 2
+    assert "convergence runs (`snakemake -j2 convergence`)" in text and "sensitivity table" in text
 
 
 def test_summary_missing_inputs_do_not_crash(tmp_path):
     text = build_summary(regression=tmp_path / "nope", compare=None, verification=[tmp_path / "v.csv"],
                          benchmarks=None, figures=None)
-    assert text.count("_Not available") == 6  # table 3, table 5, compare, verification, benchmarks, figures
+    # table 3, table 5, compare, verification, convergence, sensitivity, benchmarks, figures
+    assert text.count("_Not available") == 8
     assert "table3_comparison.csv not found" in text
 
 
@@ -65,3 +68,33 @@ def test_cli_summary(inputs, tmp_path):
 def test_md_table_escapes_and_formats():
     t = md_table(pd.DataFrame({"a": ["x|y"], "b": [float("nan")], "c": [True]}), {"a": ("A", ""), "b": ("B", ".2f"), "c": ("C", "")})
     assert t.splitlines()[2] == "| x\\|y | – | yes |"
+
+
+def test_summary_study_sections_read_the_runs(tmp_path):
+    conv = tmp_path / "convergence"
+    for sub in ("isph", "da", "regression"):
+        (conv / sub).mkdir(parents=True)
+    # planted 2D runs: runout 0.30, 0.36, 0.38 m at dx = 8, 6, 4 mm (ΔL/L0 = 1.5, 1.8, 1.9)
+    for dx, runout in ((0.008, 0.30), (0.006, 0.36), (0.004, 0.38)):
+        ds = syn.isph_run(dx=dx, runout=runout)
+        ds.attrs["n_outflow"] = 3 if dx == 0.006 else 0
+        syn.save(ds, conv / "isph" / f"T22-A70_dx{dx}.nc")
+        d = conv / "regression" / f"T22-A70_dx{dx}"
+        d.mkdir()
+        pd.DataFrame({"x_norm": [0.2, 0.4], "t_s_critical": [100 * dx, 200 * dx], "dx": [dx, dx]}).to_csv(
+            d / "critical.csv", index=False)
+    for n, r in ((250, 1.6), (500, 1.7), (1000, 1.75)):
+        syn.save(syn.da_run("1D-A70", True, r, 1.2, n=n), conv / "da" / f"1D-A70_n{n}_deposition.nc")
+    sens = tmp_path / "sensitivity.csv"
+    pd.DataFrame({"parameter": ["phi_basal_deg"] * 2, "value": [23.5, 25.5], "baseline": [0, 1],
+                  "A": [-0.02, -0.01], "B": [0.03, 0.02], "final_runout_norm": [15.0, 12.0],
+                  "flow_time": [3.0, 2.5]}).to_csv(sens, index=False)
+    text = build_summary(convergence=conv, sensitivity=sens)
+    assert "| T22-A70_dx0.004 | 4.0 | 1.900 |" in text and "| T22-A70_dx0.008 | 8.0 | 1.500 |" in text
+    assert "| 3 |" in text                                           # outflow particles of the 6 mm run
+    assert "runout +5.3 %" in text                                   # (1.9 - 1.8)/1.9
+    assert "| 4.0 | 0.40 | 0.80 |" in text and "| 8.0 | 0.80 | 1.60 |" in text   # (t_s)_C rows
+    assert "| 1D-A70 | deposition | 1.600 | 1.700 | 1.750 |" in text
+    assert "+2.9 |" in text                                          # (1.75 - 1.70)/1.75
+    assert "| phi_basal_deg | 23.5 | no | -0.0200 | -100 | 0.0300 | +50 | 15.000 | +25.0 | 3.000 | +20.0 |" in text
+    assert "Not available" not in text.split("## Convergence", 1)[1].split("## Benchmarks", 1)[0]

@@ -8,11 +8,18 @@ rule summary:
         compare=f"{RESULTS}/compare/comparison.csv",
         verification=[f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"],
         figures=[figure_path(n) for n in ACTIVE_FIGURES],
+        # the studies beyond the paper are separate targets: their sections are filled when their
+        # outputs exist (a later `snakemake` reruns the summary when they are newer), else the
+        # summary says "not available" and names the target
+        studies=lambda wc: [p for p in (f"{RESULTS}/figures/convergence.png", f"{RESULTS}/figures/sensitivity.png")
+                            if os.path.exists(p)],
     output:
         report(f"{RESULTS}/summary.md", category="Summary"),
     params:
         regression=f"{RESULTS}/regression",
         benchmarks=BENCH,
+        convergence=f"{RESULTS}/convergence",
+        sensitivity=f"{RESULTS}/sensitivity/sensitivity.csv",
     log:
         f"{LOGS}/summary.log",
     benchmark:
@@ -23,7 +30,8 @@ rule summary:
         mem_mb=2000,
     shell:
         "granudep summary -o {output} --regression {params.regression} --compare {input.compare}"
-        " --verification {input.verification} --benchmarks {params.benchmarks} > {log} 2>&1"
+        " --verification {input.verification} --benchmarks {params.benchmarks}"
+        " --convergence {params.convergence} --sensitivity {params.sensitivity} > {log} 2>&1"
 
 
 rule benchmarks_summary:

@@ -43,7 +43,8 @@ def _cmd_summary(args) -> int:
     from ..report import build_summary
     from ..io import write_text
     text = build_summary(regression=args.regression, compare=args.compare, verification=args.verification or [],
-                         benchmarks=args.benchmarks, figures=args.figures, output=args.output)
+                         benchmarks=args.benchmarks, figures=args.figures, output=args.output,
+                         convergence=args.convergence, sensitivity=args.sensitivity)
     write_text(text, args.output)
     LOG.info("summary written to %s", args.output)
     return 0
@@ -90,6 +91,8 @@ def register(sub) -> None:
     p = sub.add_parser("summary", help="Markdown summary: paper-vs-ours tables, verification, figures")
     p.add_argument("-o", "--output", required=True, metavar="summary.md")
     p.add_argument("--regression", metavar="DIR", help="granudep regress output folder")
+    p.add_argument("--convergence", metavar="DIR", help="convergence study folder (isph/, regression/, da/)")
+    p.add_argument("--sensitivity", metavar="CSV", help="sensitivity study table")
     p.add_argument("--compare", metavar="CSV", help="granudep compare output")
     p.add_argument("--verification", nargs="*", metavar="CSV", help="granudep verify outputs")
     p.add_argument("--benchmarks", metavar="CSV|DIR", help="benchmark CSV, or a folder of Snakemake benchmark .tsv files")
