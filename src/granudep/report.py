@@ -362,3 +362,62 @@ def build_summary(regression=None, compare=None, verification=(), benchmarks=Non
         section_figures(figures, out_dir),
     ]
     return "\n".join(parts)
+
+
+def caption_numbers(results) -> dict:
+    """Short 'our number' sentences for the report captions (workflow/report/*.rst), read from the
+    outputs under ``results``; a missing output gives "not computed yet (...)". The Snakefile puts
+    this dict into ``config["_caption_numbers"]`` when it is parsed, so ``snakemake --report``
+    quotes the numbers of the files it reports on."""
+    root = Path(results)
+    nums: dict[str, str] = {}
+
+    def missing(what):
+        return f"not computed yet ({what} missing)"
+
+    t3 = _read_csv(root / "regression" / "table3_comparison.csv")
+    if t3 is not None and len(t3):
+        nums["table3"] = (f"mean |(t_s)_C difference| from Table 3: {_pct_mean(t3.get('rel_diff_pct', pd.Series(dtype=float)))} "
+                          f"(onset), {_pct_mean(t3.get('rel_diff_fit_pct', pd.Series(dtype=float)))} (fit intercept) "
+                          f"over {len(t3)} (case, [x]) pairs")
+    else:
+        nums["table3"] = missing("regression/table3_comparison.csv")
+    t5 = _read_csv(root / "regression" / "table5_comparison.csv")
+    if t5 is not None and len(t5):
+        nums["table5"] = "; ".join(f"a = {r.a:g}: A = {_fmt(r.A, '.4f')} (paper {_fmt(r.A_paper, '.4f')}), "
+                                   f"B = {_fmt(r.B, '.4f')} (paper {_fmt(r.B_paper, '.4f')})"
+                                   for r in t5.sort_values("a").itertuples())
+    else:
+        nums["table5"] = missing("regression/table5_comparison.csv")
+    cmp = _read_csv(root / "compare" / "comparison.csv")
+    if cmp is not None and len(cmp):
+        mx = max_errors(cmp)
+        nums["fig16"] = "; ".join(f"{r.variant}, {r.quantity.replace('_', ' ')}: max |error| "
+                                  f"{100 * r.max_abs_rel_error:.0f} % at {r.case} (paper {100 * r.paper_max_error:.0f} %)"
+                                  for r in mx.itertuples()) if not mx.empty else "no comparable case"
+        ref = cmp.drop_duplicates("case").sort_values("a")
+        nums["fig15"] = "; ".join(f"{r.case}: 2D ΔL∞/L0 = {_fmt(r.reference_final_runout_norm, '.2f')}, "
+                                  f"t_F = {_fmt(r.reference_flow_time, '.2f')} s" for r in ref.itertuples())
+        if "reference_flow_time_norm" in ref:
+            nums["fig7"] = "flow times of the 22° 2D runs t_F/t_c = " + ", ".join(
+                f"{_fmt(r.reference_flow_time_norm, '.1f')} (a = {r.a:g})" for r in ref.itertuples())
+    else:
+        nums["fig16"] = nums["fig15"] = missing("compare/comparison.csv")
+    nums.setdefault("fig7", missing("compare/comparison.csv"))
+    sens = _read_csv(root / "sensitivity" / "sensitivity.csv")
+    if sens is not None and len(sens) and "final_runout_norm" in sens:
+        parts = []
+        for p, g in sens.groupby("parameter", sort=False):
+            r = g["final_runout_norm"]
+            parts.append(f"{p} {g['value'].min():g}–{g['value'].max():g}: DA ΔL/L0 {r.min():.2f}–{r.max():.2f}")
+        nums["sensitivity"] = "; ".join(parts)
+    else:
+        nums["sensitivity"] = missing("sensitivity/sensitivity.csv; run `snakemake -j2 sensitivity`")
+    conv = root / "convergence" / "isph"
+    if conv.is_dir() and any(conv.glob("*.nc")):
+        iso = _study_rows_isph(conv).sort_values("dx_mm", ascending=False)
+        nums["convergence"] = "2D ΔL∞/L0 = " + ", ".join(
+            f"{_fmt(r.get('final_runout_norm'), '.2f')} (dx = {r['dx_mm']:.0f} mm)" for _, r in iso.iterrows())
+    else:
+        nums["convergence"] = missing("convergence/isph; run `snakemake -j2 convergence`")
+    return nums

@@ -98,3 +98,26 @@ def test_summary_study_sections_read_the_runs(tmp_path):
     assert "+2.9 |" in text                                          # (1.75 - 1.70)/1.75
     assert "| phi_basal_deg | 23.5 | no | -0.0200 | -100 | 0.0300 | +50 | 15.000 | +25.0 | 3.000 | +20.0 |" in text
     assert "Not available" not in text.split("## Convergence", 1)[1].split("## Benchmarks", 1)[0]
+
+
+def test_caption_numbers_from_outputs_and_rendered_in_captions(inputs, tmp_path):
+    jinja2 = pytest.importorskip("jinja2")
+    from pathlib import Path
+    from types import SimpleNamespace
+    from granudep.report import caption_numbers
+    root = tmp_path / "results"
+    (root / "compare").mkdir(parents=True)
+    inputs["regression"].rename(root / "regression")
+    Path(inputs["compare"]).rename(root / "compare" / "comparison.csv")
+    nums = caption_numbers(root)
+    assert "3.0 % (onset), 5.1 % (fit intercept) over 1" in nums["table3"]
+    assert nums["table5"] == "a = 0.7: A = -0.0271 (paper -0.0313), B = 0.0533 (paper 0.0402)"
+    assert "no deposition, runout: max |error| 50 % at 1D-A70 (paper 55 %)" in nums["fig16"]
+    assert "deposition, runout: max |error| 20 % at 1D-A70 (paper 17 %)" in nums["fig16"]
+    assert nums["sensitivity"].startswith("not computed yet") and nums["convergence"].startswith("not computed yet")
+    caption = (Path(__file__).resolve().parents[2] / "workflow" / "report" / "fig16.rst").read_text()
+    text = jinja2.Environment().from_string(caption).render(
+        snakemake=SimpleNamespace(config={"_caption_numbers": nums}))
+    assert "max |error| 50 % at 1D-A70 (paper 55 %)" in text
+    # without numbers (config key absent) the caption still renders
+    assert "not computed yet" in jinja2.Environment().from_string(caption).render(snakemake=SimpleNamespace(config={}))

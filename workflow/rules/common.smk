@@ -10,6 +10,17 @@ from snakemake.exceptions import WorkflowError
 os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
 
 RESULTS = "results"
+
+# Our numbers quoted in the report captions (workflow/report/*.rst read
+# snakemake.config["_caption_numbers"][...]): read from the outputs present when the workflow is
+# parsed, so `snakemake --report` quotes the files it reports on. Never stops a run.
+try:
+    from granudep.report import caption_numbers
+
+    config["_caption_numbers"] = caption_numbers(RESULTS)
+except Exception as _exc:  # a half-written output must not block the workflow
+    print(f"granudep: report caption numbers not available: {_exc}", file=sys.stderr)
+    config["_caption_numbers"] = {}
 LOGS = f"{RESULTS}/logs"
 BENCH = f"{RESULTS}/benchmarks"
 WARM = f"{RESULTS}/.numba_warm"
