@@ -105,7 +105,14 @@ def convergence(isph=(), critical=(), da=(), x_norms=(0.2, 0.4, 0.6, 0.8)):
             ax_of[key].set_ylabel(lab)
     for k, key in enumerate(panels):
         ax_of[key].grid(alpha=0.3)
-        ax_of[key].legend(fontsize=7)
+        if key == "da_time" and "da_runout" in ax_of:
+            continue  # one legend for both DA panels (next to them, not over the curves)
+        if key == "da_runout" and "da_time" in ax_of:
+            ax_of["da_time"].legend(*ax_of[key].get_legend_handles_labels(), fontsize=7, loc="upper left",
+                                    bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+        else:
+            ax_of[key].legend(fontsize=7)
+    for k, key in enumerate(panels):
         panel_label(ax_of[key], k)
     hide_unused(axes, len(panels))
     note(fig, "Finer resolution to the right. Front: depth ≥ the file's front_depth_threshold, contiguous; "
@@ -115,6 +122,10 @@ def convergence(isph=(), critical=(), da=(), x_norms=(0.2, 0.4, 0.6, 0.8)):
 
 QUANTITIES = {"A": "A (–)", "B": "B (–)", "final_runout_norm": "DA final runout ΔL/L0 (–)",
               "flow_time": "DA flow time t_F (s)"}
+# axis labels of the swept parameters (config keys of the `sensitivity:` section); others as named
+PARAMETERS = {"phi_internal_deg": "internal friction angle φ_I (°)", "phi_basal_deg": "basal friction angle φ_B (°)",
+              "critical_speed": "critical (deposition) speed (m/s)",
+              "divergence_threshold": "F/D interface threshold ∇·r (–)"}
 
 
 def sensitivity(tables):
@@ -133,8 +144,14 @@ def sensitivity(tables):
                 b = g[g["baseline"].astype(bool)]
                 ax.plot(b["value"], b[q], "s", ms=8, mfc="none", mec="C3", label="paper value")
                 ax.legend(fontsize=7)
-            ax.set_xlabel(str(p))
+            ax.set_xlabel(PARAMETERS.get(str(p), str(p)))
             ax.set_ylabel(QUANTITIES[q])
+            # plain tick labels: a nearly flat response must read as such, not as an offset "+1.303e1"
+            ax.ticklabel_format(axis="y", useOffset=False, style="plain")
+            if ax.get_ylim()[1] - ax.get_ylim()[0] < 1e-3 * max(abs(g[q]).max(), 1e-300):
+                lo, hi = float(g[q].min()), float(g[q].max())
+                pad = max(0.01 * max(abs(lo), abs(hi)), 1e-12)
+                ax.set_ylim(lo - pad, hi + pad)
             ax.grid(alpha=0.3)
     note(fig, "One parameter changed at a time from the paper's value.")
     return fig
