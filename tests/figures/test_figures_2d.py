@@ -149,3 +149,23 @@ def test_cli_png(files, tmp_path, name):
 def test_wrong_input_kind_refused(files, tmp_path, capsys):
     assert main(["figure", "fig8", "-o", str(tmp_path / "x.png"), files["crit"]]) == 2
     assert "'critical' file" in capsys.readouterr().err
+
+
+def test_outflow_particles_are_not_drawn():
+    # particle 0 leaves through the outflow at t = 0.5 s and sits frozen at x = 4.2 m afterwards
+    ds = syn.isph_run("T22-A70")
+    t = ds["time"].values
+    gone = t >= 0.5
+    x = ds["x"].values.copy()
+    x[gone, 0] = 4.2
+    ds["x"].values[:] = x
+    ot = np.full(ds.sizes["particle"], np.nan)
+    ot[0] = 0.5
+    ds["outflow_time"] = (("particle",), ot, {"units": "s", "long_name": "outflow time"})
+    late = int(np.flatnonzero(gone)[-1])
+    assert isph2d.present(ds, late).sum() == ds.sizes["particle"] - 1 and isph2d.present(ds, 0).all()
+    fig = isph2d.fig7([ds], ts=[t[late] / isph2d.scales(ds)["tc"]])
+    assert fig.axes[0].get_xlim()[1] < 1.0          # the mass (front 0.5 m), not the end of the bed
+    fig = isph2d.fig5(ds, times=[t[late]])
+    xs = np.concatenate([ln.get_xdata() for ln in fig.axes[0].lines if len(ln.get_xdata()) > 2])
+    assert xs.max() < 1.0

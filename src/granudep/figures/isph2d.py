@@ -61,6 +61,16 @@ def _time_index(time, t):
     return int(np.argmin(np.abs(np.asarray(time) - t)))
 
 
+def present(ds, i: int) -> np.ndarray:
+    """Particles still in the domain at time index i: those that left through the downstream
+    outflow (``outflow_time`` <= t) sit frozen at the end of the bed and are not drawn."""
+    n = ds.sizes["particle"]
+    if "outflow_time" not in ds:
+        return np.ones(n, bool)
+    ot = np.asarray(ds["outflow_time"].values, float)
+    return ~(ot <= float(ds["time"].values[i]))
+
+
 def rest_time(ds) -> float:
     t = float(ds["time_to_rest"].values) if "time_to_rest" in ds else float("nan")
     return t if math.isfinite(t) else float(ds["time"].values[-1])
@@ -111,7 +121,8 @@ def fig5(run, times=None, failure_t_s: float = 1.0):
     ax = axes[0, 0]
     dx = float(ds.attrs["dx"])
     for c, i in zip(colours(len(idx), "plasma"), idx):
-        xc, top = surface_profile(ds["x"].values[i], ds["y"].values[i], dx)
+        keep = present(ds, i)
+        xc, top = surface_profile(ds["x"].values[i][keep], ds["y"].values[i][keep], dx)
         ax.plot(xc, top, color=c, lw=1.5, label=f"t = {time[i]:.2f} s (t_s = {time[i] / sc['tc']:.1f})")
     ax.axvline(sc["L0"], color="0.5", lw=0.8, ls=":")
     ax.text(sc["L0"], sc["H0"] * 1.02, "gate", ha="center", va="bottom", fontsize=8, color="0.4")
@@ -168,12 +179,13 @@ def fig7(runs, ts=None, sections=(), n_times: int = 4):
         col, block = c % ncols, c // ncols
         dx = float(ds.attrs["dx"])
         x_all = ds["x"].values
-        xmax = float(np.nanmax(x_all)) + dx
+        xmax = max(float(np.nanmax(x_all[i][present(ds, i)])) for i in idx) + dx
         sec = _sections_for(secs, case_of(ds))
         for r, i in enumerate(idx):
             ax = axes[block * nt + r, col]
-            x, y = x_all[i], ds["y"].values[i]
-            dep = np.hypot(ds["u"].values[i], ds["v"].values[i]) < CRITICAL_SPEED
+            keep = present(ds, i)
+            x, y = x_all[i][keep], ds["y"].values[i][keep]
+            dep = np.hypot(ds["u"].values[i][keep], ds["v"].values[i][keep]) < CRITICAL_SPEED
             ax.scatter(x[dep], y[dep], s=1.5, c="0.6", lw=0, rasterized=True, label="deposited (|v| < 0.1 m/s)")
             ax.scatter(x[~dep], y[~dep], s=1.5, c="C1", lw=0, rasterized=True, label="flowing")
             xc, yi = interface_profile(x, y, dep, dx)
