@@ -1,0 +1,128 @@
+"""Numba Jacobi-CG (granudep.isph.linsolve): the same iterates as scipy's cg, bit for bit.
+
+Bitwise equality is the requirement (not a tolerance): the collapse amplifies solver-tolerance
+differences (docs/paper-notes.md, "Linear solvers"), so anything less would change the runs.
+"""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from granudep.isph.linsolve import csr_matvec, pcg_jacobi, pcg_jacobi_pair
+from granudep.isph.neighbours import build_neighbours
+
+
+def _particle_matrix(n_side=24, shift=0.05, seed=0, diag_extra=None):
+    """CSR like the ISPH kernels write it: per row the diagonal first, then the neighbours in
+    neighbour-list order (unsorted); off-diagonal -w_ij (w > 0, symmetric), diagonal
+    shift + Σ w (+ diag_extra: a second diagonal for the pair solve)."""
+    rng = np.random.default_rng(seed)
+    g = np.arange(n_side) * 1.0
+    x, y = (a.ravel() + 0.2 * rng.standard_normal(n_side * n_side) for a in np.meshgrid(g, g))
+    n = x.size
+    start, nbr, rx, ry, rr = build_neighbours(x, y, n, 2.6, 0.0)
+    w = (1.0 - rr / 2.6) ** 4  # symmetric: a function of the pair distance
+    indptr = np.zeros(n + 1, np.int64)
+    indptr[1:] = np.cumsum(np.diff(start) + 1)
+    indices = np.empty(indptr[-1], np.int64)
+    data = np.empty(indptr[-1])
+    for i in range(n):  # test set-up only
+        a, b = start[i], start[i + 1]
+        indices[indptr[i]] = i
+        indices[indptr[i] + 1:indptr[i + 1]] = nbr[a:b]
+        data[indptr[i] + 1:indptr[i + 1]] = -w[a:b]
+        data[indptr[i]] = shift * (1.0 + rng.random()) + w[a:b].sum()
+    return indptr, indices, data
+
+
+def _scipy_cg(indptr, indices, data, b, x0, rtol=1e-8, maxiter=1000):
+    n = indptr.size - 1
+    a = sp.csr_matrix((data, indices, indptr), shape=(n, n))
+    dinv = 1.0 / data[indptr[:-1]]
+    m = spla.LinearOperator((n, n), matvec=lambda z: dinv * z)
+    it = [0]
+
+    def cb(_):
+        it[0] += 1
+    x, info = spla.cg(a, b, x0=x0, rtol=rtol, atol=0.0, maxiter=maxiter, M=m, callback=cb)
+    return x, it[0], info
+
+
+def test_matrix_is_symmetric_with_diagonal_first():
+    indptr, indices, data = _particle_matrix()
+    n = indptr.size - 1
+    a = sp.csr_matrix((data, indices, indptr), shape=(n, n))
+    assert abs(a - a.T).max() == 0.0
+    assert np.all(indices[indptr[:-1]] == np.arange(n))
+    assert np.diff(indptr).min() >= 5  # neighbours beyond the diagonal (not a trivial matrix)
+
+
+def test_matvec_equals_scipy_bitwise():
+    indptr, indices, data = _particle_matrix()
+    n = indptr.size - 1
+    x = np.random.default_rng(3).standard_normal(n)
+    out = np.empty(n)
+    csr_matvec(indptr, indices, data, x, out)
+    assert np.array_equal(out, sp.csr_matrix((data, indices, indptr), shape=(n, n)) @ x)
+
+
+@pytest.mark.parametrize("shift, warm", [(0.05, False), (0.05, True), (1e-4, True), (1.0, False)])
+def test_pcg_jacobi_reproduces_scipy_cg_bitwise(shift, warm):
+    indptr, indices, data = _particle_matrix(shift=shift)
+    n = indptr.size - 1
+    rng = np.random.default_rng(7)
+    b = rng.standard_normal(n)
+    x0 = b + 0.1 * rng.standard_normal(n) if warm else np.zeros(n)
+    xs, its, infos = _scipy_cg(indptr, indices, data, b, x0)
+    x, it, info = pcg_jacobi(indptr, indices, data, b, x0, 1e-8, 0.0, 1000)
+    assert infos == 0 and info == 0
+    assert it == its and it > 10
+    assert np.array_equal(x, xs)
+    a = sp.csr_matrix((data, indices, indptr), shape=(n, n))
+    assert np.linalg.norm(b - a @ x) < 1e-8 * np.linalg.norm(b)
+    assert not np.shares_memory(x, x0) and np.array_equal(x0, x0)
+
+
+def test_pcg_jacobi_maxiter_and_zero_rhs_match_scipy():
+    indptr, indices, data = _particle_matrix(shift=1e-4)
+    n = indptr.size - 1
+    b = np.random.default_rng(1).standard_normal(n)
+    xs, its, infos = _scipy_cg(indptr, indices, data, b, np.zeros(n), maxiter=5)
+    x, it, info = pcg_jacobi(indptr, indices, data, b, np.zeros(n), 1e-8, 0.0, 5)
+    assert infos == 5 and info == 5 and it == 5
+    assert np.array_equal(x, xs)
+    x, it, info = pcg_jacobi(indptr, indices, data, np.zeros(n), np.ones(n), 1e-8, 0.0, 1000)
+    assert info == 0 and it == 0 and np.array_equal(x, np.zeros(n))
+
+
+def test_pair_equals_two_single_solves_bitwise():
+    indptr, indices, data = _particle_matrix(shift=0.05)
+    n = indptr.size - 1
+    rng = np.random.default_rng(11)
+    diag_v = data[indptr[:-1]] + 0.3 * rng.random(n)  # v diagonal: same off-diagonal, more drag
+    data_v = data.copy()
+    data_v[indptr[:-1]] = diag_v
+    bu, bv = rng.standard_normal(n), 0.01 * rng.standard_normal(n)
+    xu, itu, infou, xv, itv, infov = pcg_jacobi_pair(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000)
+    xu1, itu1, _ = _scipy_cg(indptr, indices, data, bu, bu)
+    xv1, itv1, _ = _scipy_cg(indptr, indices, data_v, bv, bv)
+    assert infou == 0 and infov == 0
+    assert (itu, itv) == (itu1, itv1) and itu != itv  # the two recurrences stop on their own tests
+    assert np.array_equal(xu, xu1) and np.array_equal(xv, xv1)
+    # one side with a zero right-hand side, the other not converging in the allowed iterations
+    xu, itu, infou, xv, itv, infov = pcg_jacobi_pair(indptr, indices, data, diag_v, np.zeros(n), bu, bv, bv,
+                                                     1e-8, 0.0, 3)
+    xv3, itv3, infov3 = _scipy_cg(indptr, indices, data_v, bv, bv, maxiter=3)
+    assert (itu, infou) == (0, 0) and np.array_equal(xu, np.zeros(n))
+    assert (itv, infov) == (3, 3) == (itv3, infov3) and np.array_equal(xv, xv3)
+
+
+def test_pair_rejects_a_matrix_without_the_diagonal_first():
+    indptr, indices, data = _particle_matrix(n_side=6)
+    n = indptr.size - 1
+    i0 = indptr[0]
+    indices[[i0, i0 + 1]] = indices[[i0 + 1, i0]]
+    data[[i0, i0 + 1]] = data[[i0 + 1, i0]]
+    b = np.ones(n)
+    with pytest.raises(ValueError, match="diagonal must be the first entry"):
+        pcg_jacobi_pair(indptr, indices, data, np.ones(n), b, b, b, b, 1e-8, 0.0, 10)
