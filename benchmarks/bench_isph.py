@@ -36,29 +36,33 @@ def per_step(case: str, dx: float, steps: int, solver: str) -> dict:
     return {"case": case, "solver": solver, "particles": s.nf, "ms_per_step": 1e3 * wall / n,
             "particle_steps_per_s": s.nf * n / wall, "neighbours_ms": 1e3 * st.t_neigh / n,
             "kernels_ms": 1e3 * st.t_kern / n, "viscous_ms": 1e3 * st.t_visc / n, "ppe_ms": 1e3 * st.t_ppe / n,
-            "cg_iters_ppe": st.ppe_iters / n, "cg_iters_visc": st.visc_iters / n}
+            "cg_iters_ppe": st.ppe_iters / n, "cg_iters_visc": st.visc_iters / n, "fallbacks": st.fallbacks}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=100)
     ap.add_argument("--full", action="store_true", help="also run T22-A70 at dx = 4 mm to rest")
+    ap.add_argument("--solvers", default="cg,cg_dic,direct", help="comma-separated solvers to time per step")
+    ap.add_argument("--full-solver", default="cg", help="solver (PPE and viscous) of the --full run")
     args = ap.parse_args()
     print(f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', '(unset)')}")
     t0 = time.perf_counter()
     warmup()
     print(f"warm-up (numba compile or cache load): {time.perf_counter() - t0:.1f} s")
-    for solver in ("cg", "direct"):
+    for solver in args.solvers.split(","):
         r = per_step("T22-A150", 0.004, args.steps if solver == "cg" else max(args.steps // 4, 10), solver)
         print(f"{r['case']} dx=4mm {r['particles']} particles, {solver:6s}: {r['ms_per_step']:7.2f} ms/step, "
               f"{r['particle_steps_per_s']:9.3g} particle-steps/s  [neighbours {r['neighbours_ms']:.2f}, "
               f"kernels {r['kernels_ms']:.2f}, viscous {r['viscous_ms']:.2f}, PPE {r['ppe_ms']:.2f} ms; "
-              f"CG iterations/step: PPE {r['cg_iters_ppe']:.0f}, viscous {r['cg_iters_visc']:.0f}]")
+              f"CG iterations/step: PPE {r['cg_iters_ppe']:.0f}, viscous (u+v) {r['cg_iters_visc']:.0f}; "
+              f"direct fallbacks {r['fallbacks']}]")
     if args.full:
         t0 = time.perf_counter()
-        ds = run_isph("T22-A70", dx=0.004, progress_s=30.0)
+        ds = run_isph("T22-A70", dx=0.004, progress_s=30.0,
+                      **{"numerics.pressure_solver": args.full_solver, "numerics.viscous_solver": args.full_solver})
         wall = time.perf_counter() - t0
-        print(f"T22-A70 dx=4mm: {ds.attrs['status']} at t={float(ds.time[-1]):.3f} s, time_to_rest="
+        print(f"T22-A70 dx=4mm ({args.full_solver}): {ds.attrs['status']} at t={float(ds.time[-1]):.3f} s, time_to_rest="
               f"{float(ds.time_to_rest):.3f} s ({ds.attrs['time_to_rest_norm']:.2f} t_c), front "
               f"{float(ds.final_front_position):.3f} m, {ds.attrs['n_steps']} steps, wall {wall:.1f} s "
               f"({ds.attrs['ms_per_step']:.2f} ms/step)")

@@ -8,7 +8,7 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from granudep.isph.linsolve import csr_matvec, pcg_jacobi, pcg_jacobi_pair
+from granudep.isph.linsolve import csr_matvec, dic_diagonal, pcg_dic, pcg_jacobi, pcg_jacobi_pair, split_triangles
 from granudep.isph.neighbours import build_neighbours
 
 
@@ -126,3 +126,76 @@ def test_pair_rejects_a_matrix_without_the_diagonal_first():
     b = np.ones(n)
     with pytest.raises(ValueError, match="diagonal must be the first entry"):
         pcg_jacobi_pair(indptr, indices, data, np.ones(n), b, b, b, b, 1e-8, 0.0, 10)
+
+
+# ---- DIC-preconditioned CG (cg_dic): a different iteration, judged on the true residual ----------
+def test_dic_diagonal_matches_the_incomplete_factorisation():
+    """diag(W D̃⁻¹ Wᵀ) = diag(A), W = D̃ + L, on the particle matrix (no fill-in)."""
+    indptr, indices, data = _particle_matrix(n_side=10)
+    n = indptr.size - 1
+    lp, li, lv, up, ui, uv, diag = split_triangles(indptr, indices, data)
+    dt, bad = dic_diagonal(lp, li, lv, diag)
+    assert bad == -1
+    lo = sp.csr_matrix((lv, li, lp), shape=(n, n))
+    a = sp.csr_matrix((data, indices, indptr), shape=(n, n))
+    assert abs(sp.csr_matrix((uv, ui, up), shape=(n, n)) - lo.T).max() == 0.0
+    assert np.array_equal(diag, a.diagonal())
+    w = lo + sp.diags(dt)
+    m = (w @ sp.diags(1.0 / dt) @ w.T).toarray()
+    assert np.allclose(np.diag(m), diag, rtol=1e-13, atol=0.0)
+    assert np.all(dt > 0) and np.all(dt <= diag)
+
+
+@pytest.mark.parametrize("shift, warm", [(0.05, False), (0.05, True), (1e-4, True)])
+def test_pcg_dic_meets_the_true_residual_test_in_fewer_iterations(shift, warm):
+    indptr, indices, data = _particle_matrix(shift=shift)
+    n = indptr.size - 1
+    rng = np.random.default_rng(7)
+    b = rng.standard_normal(n)
+    x0 = b + 0.1 * rng.standard_normal(n) if warm else np.zeros(n)
+    a = sp.csr_matrix((data, indices, indptr), shape=(n, n))
+    _, it_j, _ = pcg_jacobi(indptr, indices, data, b, x0, 1e-8, 0.0, 1000)
+    x, it, info = pcg_dic(indptr, indices, data, b, x0, 1e-8, 0.0, 1000)
+    assert info == 0
+    assert np.linalg.norm(b - a @ x) < 1e-8 * np.linalg.norm(b)  # scipy's rule, on the true residual
+    assert it < 0.6 * it_j  # the preconditioner pays (2.5x fewer on the ISPH PPE)
+    exact = spla.spsolve(a.tocsc(), b)
+    # error <= cond * residual; cond of these matrices < 1e4 (shift 1e-4: < 1e5)
+    assert np.abs(x - exact).max() < 1e-8 * 1e5 * np.abs(exact).max()
+    x2, it2, info2 = pcg_dic(indptr, indices, data, b, x0, 1e-11, 0.0, 1000)
+    assert info2 == 0 and it2 > it
+    assert np.linalg.norm(b - a @ x2) < 1e-11 * np.linalg.norm(b)
+
+
+def test_pcg_dic_edge_cases():
+    indptr, indices, data = _particle_matrix(shift=1e-4)
+    n = indptr.size - 1
+    b = np.random.default_rng(1).standard_normal(n)
+    x, it, info = pcg_dic(indptr, indices, data, np.zeros(n), np.ones(n), 1e-8, 0.0, 1000)
+    assert (it, info) == (0, 0) and np.array_equal(x, np.zeros(n))
+    exact = spla.spsolve(sp.csr_matrix((data, indices, indptr), shape=(n, n)).tocsc(), b)
+    x, it, info = pcg_dic(indptr, indices, data, b, exact, 1e-8, 0.0, 1000)  # already converged
+    assert (it, info) == (0, 0) and np.array_equal(x, exact)
+    x, it, info = pcg_dic(indptr, indices, data, b, np.zeros(n), 1e-8, 0.0, 3)
+    assert (it, info) == (3, 3) and np.all(np.isfinite(x))
+    bad = data.copy()
+    bad[indptr[5]] = -1.0  # negative diagonal: not positive definite
+    x0 = np.full(n, 2.0)
+    x, it, info = pcg_dic(indptr, indices, bad, b, x0, 1e-8, 0.0, 1000)
+    assert (it, info) == (0, -1) and np.array_equal(x, x0)
+
+
+def test_cg_dic_run_agrees_with_direct_like_cg():
+    """Short T22-A70 collapse (dx = 1 cm, 0.1 s): cg_dic and cg both follow the direct solve; the
+    difference of each from it is solver-tolerance noise amplified by the flow (measured max KE
+    difference / max KE: cg 6.3e-5, cg_dic 5.8e-5; bound 2e-4 for both)."""
+    from granudep.isph.api import run_isph
+    runs = {s: run_isph("T22-A70", dx=0.01, t_end=0.1, **{"numerics.pressure_solver": s,
+                                                          "numerics.viscous_solver": s})
+            for s in ("direct", "cg", "cg_dic")}
+    ke = {s: ds.kinetic_energy.values for s, ds in runs.items()}
+    scale = np.abs(ke["direct"]).max()
+    d_cg = np.abs(ke["cg"] - ke["direct"]).max() / scale
+    d_dic = np.abs(ke["cg_dic"] - ke["direct"]).max() / scale
+    assert d_cg < 2e-4 and d_dic < 2e-4
+    assert np.array_equal(runs["cg_dic"].front_position.values, runs["direct"].front_position.values)

@@ -27,7 +27,7 @@ from ..front import front_from_profile
 from ..progress import LOG, Progress
 from . import physics as ph
 from .config import IsphConfig
-from .linsolve import pcg_jacobi, pcg_jacobi_pair
+from .linsolve import pcg_dic, pcg_jacobi, pcg_jacobi_pair
 from .neighbours import build_neighbours
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
                     reference_laplacian_sum)
@@ -180,7 +180,13 @@ class IsphSolver:
             ph.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall, self.gx,
                                  self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v, clen)
             data[indptr[:-1]] = diag_u
-        if c.numerics.viscous_solver == "direct":
+        if c.numerics.viscous_solver == "cg_dic":
+            bu, bv = self.u + dt * self.gx, self.v + dt * self.gy
+            data_v = data.copy()
+            data_v[indptr[:-1]] = diag_v
+            us = self._solve_cg(indptr, indices, data, bu, bu, "visc", dic=True)
+            vs = self._solve_cg(indptr, indices, data_v, bv, bv, "visc", dic=True)
+        elif c.numerics.viscous_solver == "direct":
             data_v = data.copy()
             data_v[indptr[:-1]] = diag_v
             us = _solve_direct(indptr, indices, data, [self.u + dt * self.gx])[0]
@@ -237,12 +243,15 @@ class IsphSolver:
     def _solve_ppe(self, indptr, indices, data, rhs, guess):
         if self.cfg.numerics.pressure_solver == "direct":
             return _solve_direct(indptr, indices, data, [rhs])[0]
-        return self._solve_cg(indptr, indices, data, rhs, guess, "ppe")
+        return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
+                              dic=self.cfg.numerics.pressure_solver == "cg_dic")
 
-    def _solve_cg(self, indptr, indices, data, rhs, guess, kind):
-        """Jacobi-preconditioned CG (numba, :mod:`.linsolve`: scipy's cg iteration bit for bit),
-        warm-started; SuperLU if it does not converge in 1000 iterations."""
-        sol, it, info = pcg_jacobi(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0, 1000)
+    def _solve_cg(self, indptr, indices, data, rhs, guess, kind, dic=False):
+        """Jacobi-preconditioned CG (numba, :mod:`.linsolve`: scipy's cg iteration bit for bit) or
+        DIC-preconditioned CG (``dic``), warm-started; SuperLU if it does not converge in 1000
+        iterations."""
+        cg = pcg_dic if dic else pcg_jacobi
+        sol, it, info = cg(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0, 1000)
         if kind == "ppe":
             self.stats.ppe_iters += it
         else:
