@@ -8,7 +8,8 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from granudep.isph.linsolve import csr_matvec, dic_diagonal, pcg_dic, pcg_jacobi, pcg_jacobi_pair, split_triangles
+from granudep.isph.linsolve import (csr_matvec, dic_diagonal, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair,
+                                    split_triangles)
 from granudep.isph.neighbours import build_neighbours
 
 
@@ -199,3 +200,30 @@ def test_cg_dic_run_agrees_with_direct_like_cg():
     d_dic = np.abs(ke["cg_dic"] - ke["direct"]).max() / scale
     assert d_cg < 2e-4 and d_dic < 2e-4
     assert np.array_equal(runs["cg_dic"].front_position.values, runs["direct"].front_position.values)
+
+
+def test_dic_pair_equals_two_single_dic_solves_bitwise():
+    indptr, indices, data = _particle_matrix(shift=0.05)
+    n = indptr.size - 1
+    rng = np.random.default_rng(11)
+    diag_v = data[indptr[:-1]] + 0.3 * rng.random(n)
+    data_v = data.copy()
+    data_v[indptr[:-1]] = diag_v
+    bu, bv = rng.standard_normal(n), 0.01 * rng.standard_normal(n)
+    xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000)
+    xu1, itu1, infou1 = pcg_dic(indptr, indices, data, bu, bu, 1e-8, 0.0, 1000)
+    xv1, itv1, infov1 = pcg_dic(indptr, indices, data_v, bv, bv, 1e-8, 0.0, 1000)
+    assert (infou, infov, infou1, infov1) == (0, 0, 0, 0)
+    assert (itu, itv) == (itu1, itv1) and itu != itv and itu > 3
+    assert np.array_equal(xu, xu1) and np.array_equal(xv, xv1)
+    # zero right-hand side on one side; maxiter on the other; breakdown (negative diagonal) on v
+    xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, np.zeros(n), bu, bv, bv,
+                                                  1e-8, 0.0, 2)
+    xv2, itv2, infov2 = pcg_dic(indptr, indices, data_v, bv, bv, 1e-8, 0.0, 2)
+    assert (itu, infou) == (0, 0) and np.array_equal(xu, np.zeros(n))
+    assert (itv, infov) == (2, 2) == (itv2, infov2) and np.array_equal(xv, xv2)
+    bad_v = diag_v.copy()
+    bad_v[3] = -1.0
+    xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000)
+    assert infov == -1 and np.array_equal(xv, bv)
+    assert (itu, infou) == (itu1, 0) and np.array_equal(xu, xu1)

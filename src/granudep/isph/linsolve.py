@@ -403,3 +403,156 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter):
     for i in range(n):
         x[i] += e[i]
     return x, maxiter, maxiter
+
+
+@njit(cache=True)
+def _pair_eisenstat_product(lp, li, lv, up, ui, uv, dinv_u, dinv_v, kd_u, kd_v, pu, pv, tu, tv, wu, wv, qu, qv):
+    """:func:`_eisenstat_product` for the u and v systems in one pair of sweeps (shared
+    off-diagonal entries; per side the same operations in the same order)."""
+    n = pu.size
+    for i in range(n - 1, -1, -1):
+        au = pu[i]
+        av = pv[i]
+        for k in range(up[i], up[i + 1]):
+            a = uv[k]
+            j = ui[k]
+            au -= a * tu[j]
+            av -= a * tv[j]
+        tu[i] = au * dinv_u[i]
+        tv[i] = av * dinv_v[i]
+    for i in range(n):
+        au = pu[i] + kd_u[i] * tu[i]
+        av = pv[i] + kd_v[i] * tv[i]
+        for k in range(lp[i], lp[i + 1]):
+            a = lv[k]
+            j = li[k]
+            au -= a * wu[j]
+            av -= a * wv[j]
+        wu[i] = au * dinv_u[i]
+        qu[i] = wu[i] + tu[i]
+        wv[i] = av * dinv_v[i]
+        qv[i] = wv[i] + tv[i]
+
+
+@njit(cache=True)
+def _side_residual(indptr, indices, data, diag_v, is_v, b, x, r):
+    """‖b − A x‖ for the u matrix (``data``) or the v matrix (``data`` with diagonal ``diag_v``)."""
+    if is_v:
+        _pair_matvec(indptr, indices, data, diag_v, x, x, r, r, False, True)
+        for i in range(b.size):
+            r[i] = b[i] - r[i]
+        return math.sqrt(np.dot(r, r))
+    return _residual(indptr, indices, data, b, x, r)
+
+
+@njit(cache=True)
+def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
+    """:func:`pcg_dic` on the u and v viscous systems in lock-step (A_v = A_u with diagonal
+    ``diag_v``; diagonal first in each row): each side gives the same result as its own
+    :func:`pcg_dic` call, bit for bit, with one traversal of the off-diagonal entries per
+    iteration for both. Returns (x_u, iterations_u, info_u, x_v, iterations_v, info_v)."""
+    n = bu.size
+    for i in range(n):
+        if indices[indptr[i]] != i:
+            raise ValueError("pcg_dic_pair: the diagonal must be the first entry of each row")
+    bs = (bu, bv)
+    xs = (xu0.copy(), xv0.copy())
+    its = np.zeros(2, np.int64)
+    infos = np.zeros(2, np.int64)
+    run = np.zeros(2, np.bool_)
+    thresh = np.zeros(2)
+    r = np.empty((2, n))
+    out = [bu.copy(), bv.copy()]
+    for s in range(2):
+        b = bs[s]
+        thresh[s] = max(atol, rtol * math.sqrt(np.dot(b, b)))
+        if math.sqrt(np.dot(b, b)) == 0.0:
+            out[s] = b.copy()
+            continue
+        if _any_nonzero(xs[s]):
+            nr = _side_residual(indptr, indices, data, diag_v, s == 1, b, xs[s], r[s])
+        else:
+            r[s, :] = b
+            nr = math.sqrt(np.dot(r[s], r[s]))
+        out[s] = xs[s].copy()
+        if not nr < thresh[s]:
+            run[s] = True
+    if not (run[0] or run[1]):
+        return out[0], 0, 0, out[1], 0, 0
+    lp, li, lv, up, ui, uv, diag_u = split_triangles(indptr, indices, data)
+    dts = (dic_diagonal(lp, li, lv, diag_u), dic_diagonal(lp, li, lv, diag_v))
+    dinv = np.ones((2, n))
+    kd = np.zeros((2, n))
+    diags = (diag_u, diag_v)
+    for s in range(2):
+        dt, bad = dts[s]
+        if run[s] and bad >= 0:
+            run[s] = False
+            infos[s] = -1  # breakdown: x = x0, the caller falls back to a direct solve
+            continue
+        if run[s]:
+            for i in range(n):
+                kd[s, i] = diags[s][i] - 2.0 * dt[i]
+                dinv[s, i] = 1.0 / dt[i]
+    rh = np.zeros((2, n))
+    eh = np.zeros((2, n))
+    z = np.empty(n)
+    p = np.zeros((2, n))
+    q = np.zeros((2, n))
+    t = np.zeros((2, n))
+    w = np.zeros((2, n))
+    e = np.empty(n)
+    xt = np.empty(n)
+    scale = np.ones(2)
+    rho_prev = np.ones(2)
+    for s in range(2):
+        if run[s]:
+            _lower_solve(lp, li, lv, dinv[s], r[s], rh[s])
+            scale[s] = math.sqrt(np.dot(r[s], r[s])) / math.sqrt(np.dot(rh[s], rh[s]))
+    rho = np.zeros(2)
+    for it in range(maxiter):
+        if not (run[0] or run[1]):
+            break
+        for s in range(2):
+            if not run[s]:
+                continue
+            dt = dts[s][0]
+            for i in range(n):
+                z[i] = dt[i] * rh[s, i]
+            rho[s] = np.dot(rh[s], z)
+            if it > 0:
+                beta = rho[s] / rho_prev[s]
+                for i in range(n):
+                    p[s, i] = p[s, i] * beta + z[i]
+            else:
+                p[s, :] = z
+        _pair_eisenstat_product(lp, li, lv, up, ui, uv, dinv[0], dinv[1], kd[0], kd[1], p[0], p[1], t[0], t[1],
+                                w[0], w[1], q[0], q[1])
+        for s in range(2):
+            if not run[s]:
+                continue
+            alpha = rho[s] / np.dot(p[s], q[s])
+            for i in range(n):
+                eh[s, i] += alpha * p[s, i]
+                rh[s, i] -= alpha * q[s, i]
+            rho_prev[s] = rho[s]
+            nrh = math.sqrt(np.dot(rh[s], rh[s]))
+            if scale[s] * nrh < thresh[s]:
+                _upper_solve(up, ui, uv, dinv[s], eh[s], e)
+                for i in range(n):
+                    xt[i] = xs[s][i] + e[i]
+                nr = _side_residual(indptr, indices, data, diag_v, s == 1, bs[s], xt, r[s])
+                if nr < thresh[s]:
+                    out[s] = xt.copy()
+                    its[s] = it + 1
+                    run[s] = False
+                else:
+                    scale[s] = nr / max(nrh, 1e-300)
+    for s in range(2):
+        if run[s]:
+            _upper_solve(up, ui, uv, dinv[s], eh[s], e)
+            for i in range(n):
+                out[s][i] = xs[s][i] + e[i]
+            its[s] = maxiter
+            infos[s] = maxiter
+    return out[0], its[0], infos[0], out[1], its[1], infos[1]

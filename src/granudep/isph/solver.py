@@ -27,7 +27,7 @@ from ..front import front_from_profile
 from ..progress import LOG, Progress
 from . import physics as ph
 from .config import IsphConfig
-from .linsolve import pcg_dic, pcg_jacobi, pcg_jacobi_pair
+from .linsolve import pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair
 from .neighbours import build_neighbours
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
                     reference_laplacian_sum)
@@ -180,19 +180,14 @@ class IsphSolver:
             ph.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall, self.gx,
                                  self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v, clen)
             data[indptr[:-1]] = diag_u
-        if c.numerics.viscous_solver == "cg_dic":
-            bu, bv = self.u + dt * self.gx, self.v + dt * self.gy
-            data_v = data.copy()
-            data_v[indptr[:-1]] = diag_v
-            us = self._solve_cg(indptr, indices, data, bu, bu, "visc", dic=True)
-            vs = self._solve_cg(indptr, indices, data_v, bv, bv, "visc", dic=True)
-        elif c.numerics.viscous_solver == "direct":
+        if c.numerics.viscous_solver == "direct":
             data_v = data.copy()
             data_v[indptr[:-1]] = diag_v
             us = _solve_direct(indptr, indices, data, [self.u + dt * self.gx])[0]
             vs = _solve_direct(indptr, indices, data_v, [self.v + dt * self.gy])[0]
         else:
-            us, vs = self._solve_cg_pair(indptr, indices, data, diag_v, self.u + dt * self.gx, self.v + dt * self.gy)
+            us, vs = self._solve_cg_pair(indptr, indices, data, diag_v, self.u + dt * self.gx, self.v + dt * self.gy,
+                                         dic=c.numerics.viscous_solver == "cg_dic")
         t3 = _time.perf_counter()
         div = ph.divergence(start, nbr, rx, ry, rr, nf, h, vol, us, vs)
         unknown = np.full(nf, -1, np.int64)
@@ -261,12 +256,13 @@ class IsphSolver:
             return _solve_direct(indptr, indices, data, [rhs])[0]
         return sol
 
-    def _solve_cg_pair(self, indptr, indices, data, diag_v, bu, bv):
-        """The u and v viscous systems (same off-diagonal, own diagonals) by Jacobi-CG in
+    def _solve_cg_pair(self, indptr, indices, data, diag_v, bu, bv, dic=False):
+        """The u and v viscous systems (same off-diagonal, own diagonals) by Jacobi- or DIC-CG in
         lock-step, each warm-started from its right-hand side; SuperLU for one that does not
         converge."""
-        xu, itu, infou, xv, itv, infov = pcg_jacobi_pair(indptr, indices, data, diag_v, bu, bu, bv, bv,
-                                                         self.cfg.numerics.solver_rtol, 0.0, 1000)
+        cg = pcg_dic_pair if dic else pcg_jacobi_pair
+        xu, itu, infou, xv, itv, infov = cg(indptr, indices, data, diag_v, bu, bu, bv, bv,
+                                            self.cfg.numerics.solver_rtol, 0.0, 1000)
         self.stats.visc_iters += itu + itv
         if infou != 0:
             self.stats.fallbacks += 1
