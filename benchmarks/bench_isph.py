@@ -1,10 +1,24 @@
 """Benchmark of the 2D ISPH solver (not a test): ms per step and particle-steps/s for a
 ~4000-particle collapse (T22-A150 at dx = 4 mm: 3750 granular particles), with the PPE and the
-implicit viscous step solved by SuperLU ("direct") and by Jacobi-CG ("cg", warm-started), and the
-wall time of T22-A70 at dx = 4 mm to rest (``--full``).
+implicit viscous step solved by SuperLU ("direct"), Jacobi-CG ("cg", numba, scipy's iterates bit
+for bit, u/v in lock-step) and DIC-preconditioned CG ("cg_dic"), all warm-started; and the wall
+time of T22-A70 at dx = 4 mm to rest (``--full``, solver ``--full-solver``).
 
-Run: NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/bench_isph.py [--steps 100] [--full]
+Run: NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/bench_isph.py [--steps 100] [--solvers cg,cg_dic,direct]
+     [--full [--full-solver cg]]
 Targets (issue 3, one core): <= 8 ms/step at ~4000 particles; T22-A70 to rest <= 60 s.
+
+Measured 2026-11-22 on the shared 2-core AMD EPYC under load (load average 1.5-4; minimum of
+interleaved repeats, so the numbers are upper bounds), ms/step [neighbours, kernels, viscous, PPE]:
+  before (scipy Jacobi-CG, two-pass neighbours): 19.2 [1.70, 1.41, 7.07, 8.98]; 157 PPE + 113 viscous CG its
+  cg:     16.7 [1.17, 1.40, 4.85, 9.07]   (same iterations; PPE is matvec-bound like scipy's)
+  cg_dic: 10.8 [0.70, 1.36, 3.66, 5.03]   (62 PPE + 56 viscous iterations)
+  direct: 50.7 (before) - 82 (under heavier load)
+Solver alone on one captured step (PPE 3603 unknowns, 74k nonzeros; viscous 3750, 77k): PPE scipy
+8.40, numba cg 8.38, cg_dic 4.30 ms; viscous u+v scipy 5.84, cg (lock-step) 3.87, cg_dic 2.60 ms.
+Neighbour list 1.43 -> 0.76 ms. T22-A70 dx = 4 mm to rest: before 27.5 s (2499 steps), cg 14.9 s
+(same 2499 steps, same result), cg_dic 12.0 s (2448 steps; a different trajectory, see
+docs/paper-notes.md "Linear solvers").
 """
 from __future__ import annotations
 
