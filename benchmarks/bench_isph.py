@@ -16,9 +16,10 @@ interleaved repeats, so the numbers are upper bounds), ms/step [neighbours, kern
   direct: 50.7 (before) - 82 (under heavier load)
 Solver alone on one captured step (PPE 3603 unknowns, 74k nonzeros; viscous 3750, 77k): PPE scipy
 8.40, numba cg 8.38, cg_dic 4.30 ms; viscous u+v scipy 5.84, cg (lock-step) 3.87, cg_dic 2.60 ms.
-Neighbour list 1.43 -> 0.76 ms. T22-A70 dx = 4 mm to rest: before 27.5 s (2499 steps), cg 14.9 s
-(same 2499 steps, same result), cg_dic 12.0 s (2448 steps; a different trajectory, see
-docs/paper-notes.md "Linear solvers").
+Neighbour list 1.43 -> 0.76 ms. T22-A70 dx = 4 mm to rest (fewer particles: scipy's per-call and
+per-iteration Python overhead weighs more): before 23.9 s (repeats 27.5, 31.1; 2499 steps), cg 14.2 s
+(repeats 14.3, 14.9; same 2499 steps, same front and rest time), cg_dic 12.0 s (2448 steps; a
+different trajectory, see docs/paper-notes.md "Linear solvers").
 """
 from __future__ import annotations
 
