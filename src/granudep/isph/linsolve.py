@@ -1,4 +1,5 @@
-"""Numba Jacobi-preconditioned conjugate gradients on the CSR arrays of the ISPH kernels.
+"""Numba conjugate gradients on the CSR arrays of the ISPH kernels: Jacobi-preconditioned
+(``cg``, the default: scipy's iterates bit for bit) and DIC-preconditioned (``cg_dic``, below).
 
 The iteration is the one of ``scipy.sparse.linalg.cg`` with ``M = diag(A)⁻¹`` (scipy 1.17,
 ``_isolve/iterative.py``), operation for operation, so that it returns the same iterates, bit for
