@@ -36,6 +36,9 @@ def _cells(x, y, cell, period, xmin, ymin, ncx, ncy):
     return cid, counts, order
 
 
+BUF_WIDTH = 64  # neighbours remembered per particle in pass 1 (about 21 on the lattice, h = 1.3 dx)
+
+
 @njit(cache=True)
 def build_neighbours(x, y, nf, radius, period):
     """Neighbours within ``radius`` of each of the first ``nf`` particles (self excluded).
@@ -58,8 +61,11 @@ def build_neighbours(x, y, nf, radius, period):
     cid, counts, order = _cells(x, y, cell, period, xmin, ymin, ncx, ncy)
     r2max = radius * radius
     half = 0.5 * period
-    # pass 1: count
+    # pass 1: count, remembering up to BUF_WIDTH accepted neighbours per particle so that pass 2
+    # revisits only those (same order, same arithmetic: the list is identical either way)
     start = np.zeros(nf + 1, np.int64)
+    buf = np.empty(nf * BUF_WIDTH, np.int32)
+    overflow = False
     for i in range(nf):
         ci = cid[i] // ncy
         cj = cid[i] % ncy
@@ -89,14 +95,36 @@ def build_neighbours(x, y, nf, radius, period):
                             ddx += period
                     ddy = y[i] - y[j]
                     if ddx * ddx + ddy * ddy < r2max:
+                        if cnt < BUF_WIDTH:
+                            buf[i * BUF_WIDTH + cnt] = j
                         cnt += 1
+        if cnt > BUF_WIDTH:
+            overflow = True
         start[i + 1] = start[i] + cnt
     m = start[nf]
     nbr = np.empty(m, np.int64)
     rx = np.empty(m)
     ry = np.empty(m)
     rr = np.empty(m)
-    # pass 2: fill
+    if not overflow:
+        for i in range(nf):
+            k = start[i]
+            for c in range(start[i + 1] - start[i]):
+                j = buf[i * BUF_WIDTH + c]
+                ddx = x[i] - x[j]
+                if period > 0.0:
+                    if ddx > half:
+                        ddx -= period
+                    elif ddx < -half:
+                        ddx += period
+                ddy = y[i] - y[j]
+                nbr[k] = j
+                rx[k] = ddx
+                ry[k] = ddy
+                rr[k] = np.sqrt(ddx * ddx + ddy * ddy)
+                k += 1
+        return start, nbr, rx, ry, rr
+    # pass 2 (a particle with more than BUF_WIDTH neighbours): fill by a second search
     for i in range(nf):
         ci = cid[i] // ncy
         cj = cid[i] % ncy

@@ -27,6 +27,7 @@ from ..front import front_from_profile
 from ..progress import LOG, Progress
 from . import physics as ph
 from .config import IsphConfig
+from .linsolve import pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair
 from .neighbours import build_neighbours
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
                     reference_laplacian_sum)
@@ -190,14 +191,14 @@ class IsphSolver:
             ph.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall, self.gx,
                                  self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v, clen)
             data[indptr[:-1]] = diag_u
-        data_v = data.copy()
-        data_v[indptr[:-1]] = diag_v
         if c.numerics.viscous_solver == "direct":
+            data_v = data.copy()
+            data_v[indptr[:-1]] = diag_v
             us = _solve_direct(indptr, indices, data, [self.u + dt * self.gx])[0]
             vs = _solve_direct(indptr, indices, data_v, [self.v + dt * self.gy])[0]
         else:
-            us = self._solve_cg(indptr, indices, data, self.u + dt * self.gx, self.u + dt * self.gx, "visc")
-            vs = self._solve_cg(indptr, indices, data_v, self.v + dt * self.gy, self.v + dt * self.gy, "visc")
+            us, vs = self._solve_cg_pair(indptr, indices, data, diag_v, self.u + dt * self.gx, self.v + dt * self.gy,
+                                         dic=c.numerics.viscous_solver == "cg_dic")
         t3 = _time.perf_counter()
         div = ph.divergence(start, nbr, rx, ry, rr, nf, h, vol, us, vs, lmat)
         unknown = np.full(nf, -1, np.int64)
@@ -249,28 +250,41 @@ class IsphSolver:
     def _solve_ppe(self, indptr, indices, data, rhs, guess):
         if self.cfg.numerics.pressure_solver == "direct":
             return _solve_direct(indptr, indices, data, [rhs])[0]
-        return self._solve_cg(indptr, indices, data, rhs, guess, "ppe")
+        return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
+                              dic=self.cfg.numerics.pressure_solver == "cg_dic")
 
-    def _solve_cg(self, indptr, indices, data, rhs, guess, kind):
-        """Jacobi-preconditioned CG (scipy), warm-started; SuperLU if it does not converge."""
-        n = indptr.size - 1
-        a = sp.csr_matrix((data, indices, indptr), shape=(n, n))
-        dinv = 1.0 / data[indptr[:-1]]  # the kernels put the diagonal first in each row
-        m = spla.LinearOperator((n, n), matvec=lambda z: dinv * z)
-        it = [0]
-
-        def cb(_):
-            it[0] += 1
-        sol, info = spla.cg(a, rhs, x0=guess, rtol=self.cfg.numerics.solver_rtol, atol=0.0, maxiter=1000, M=m,
-                            callback=cb)
+    def _solve_cg(self, indptr, indices, data, rhs, guess, kind, dic=False):
+        """Jacobi-preconditioned CG (numba, :mod:`.linsolve`: scipy's cg iteration bit for bit) or
+        DIC-preconditioned CG (``dic``), warm-started; SuperLU if it does not converge in 1000
+        iterations."""
+        cg = pcg_dic if dic else pcg_jacobi
+        sol, it, info = cg(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0, 1000)
         if kind == "ppe":
-            self.stats.ppe_iters += it[0]
+            self.stats.ppe_iters += it
         else:
-            self.stats.visc_iters += it[0]
+            self.stats.visc_iters += it
         if info != 0:
             self.stats.fallbacks += 1
             return _solve_direct(indptr, indices, data, [rhs])[0]
         return sol
+
+    def _solve_cg_pair(self, indptr, indices, data, diag_v, bu, bv, dic=False):
+        """The u and v viscous systems (same off-diagonal, own diagonals) by Jacobi- or DIC-CG in
+        lock-step, each warm-started from its right-hand side; SuperLU for one that does not
+        converge."""
+        cg = pcg_dic_pair if dic else pcg_jacobi_pair
+        xu, itu, infou, xv, itv, infov = cg(indptr, indices, data, diag_v, bu, bu, bv, bv,
+                                            self.cfg.numerics.solver_rtol, 0.0, 1000)
+        self.stats.visc_iters += itu + itv
+        if infou != 0:
+            self.stats.fallbacks += 1
+            xu = _solve_direct(indptr, indices, data, [bu])[0]
+        if infov != 0:
+            self.stats.fallbacks += 1
+            data_v = data.copy()
+            data_v[indptr[:-1]] = diag_v
+            xv = _solve_direct(indptr, indices, data_v, [bv])[0]
+        return xu, xv
 
     def _check(self) -> None:
         """NaN anywhere, or a particle through the bed, back wall or top: IsphBlowUp. A finite

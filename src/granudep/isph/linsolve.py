@@ -1,0 +1,559 @@
+"""Numba conjugate gradients on the CSR arrays of the ISPH kernels: Jacobi-preconditioned
+(``cg``, the default: scipy's iterates bit for bit) and DIC-preconditioned (``cg_dic``, below).
+
+The iteration is the one of ``scipy.sparse.linalg.cg`` with ``M = diag(A)⁻¹`` (scipy 1.17,
+``_isolve/iterative.py``), operation for operation, so that it returns the same iterates, bit for
+bit: the residual r = b − A x₀ (r = b when x₀ = 0), the stopping test ‖r‖₂ < max(rtol ‖b‖₂, atol)
+at the top of each iteration, z = D⁻¹ r, ρ = r·z, p = β p + z, q = A p, α = ρ/(p·q),
+x += α p, r −= α q. The dot products go through ``np.dot`` (BLAS ddot, the same routine numpy's
+``dot`` and ``linalg.norm`` use; bitwise equality checked in tests/isph/test_linsolve.py); the CSR
+product sums each row in storage order from 0, as scipy's ``csr_matvec`` does. Why bit-for-bit:
+the collapse amplifies differences at the solver tolerance (T22-A70 at dx = 1 cm: the kinetic
+energy at t = 1 s moves by 26 % between solver_rtol 1e-8 and 1e-10, see docs/paper-notes.md),
+so a solver that only agrees "to within the tolerance" would not reproduce the existing runs.
+
+:func:`pcg_jacobi_pair` solves the two implicit viscous systems (u and v) in lock-step: the
+matrices share the off-diagonal entries and differ on the diagonal (stored first in each row, as
+the kernels write it), so each sweep over the off-diagonal entries serves both products. Each of
+the two recurrences is exactly the single-system one (each stops on its own test).
+
+Return convention: (x, iterations, info) with info = 0 on convergence, ``maxiter`` otherwise
+(scipy's), and x = b when ‖b‖ = 0.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def csr_matvec(indptr, indices, data, x, out):
+    """out = A x (row sums in storage order, from 0)."""
+    n = indptr.size - 1
+    for i in range(n):
+        s = 0.0
+        for k in range(indptr[i], indptr[i + 1]):
+            s += data[k] * x[indices[k]]
+        out[i] = s
+
+
+@njit(cache=True)
+def _any_nonzero(x):
+    for i in range(x.size):
+        if x[i] != 0.0:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _start(indptr, indices, data, diag, b, x0, rtol, atol):
+    """Initial state of one recurrence: x, r, dinv, the stopping threshold and ‖b‖ == 0."""
+    n = b.size
+    bnrm2 = math.sqrt(np.dot(b, b))
+    thresh = max(atol, rtol * bnrm2)
+    x = x0.copy()
+    r = np.empty(n)
+    if bnrm2 == 0.0:
+        return b.copy(), r, np.empty(n), thresh, True
+    if _any_nonzero(x):
+        csr_matvec(indptr, indices, data, x, r)
+        for i in range(n):
+            r[i] = b[i] - r[i]
+    else:
+        r[:] = b
+    dinv = np.empty(n)
+    for i in range(n):
+        dinv[i] = 1.0 / diag[i]
+    return x, r, dinv, thresh, False
+
+
+@njit(cache=True)
+def _diag_first(indptr, indices, data):
+    n = indptr.size - 1
+    d = np.empty(n)
+    for i in range(n):
+        d[i] = data[indptr[i]]
+    return d
+
+
+@njit(cache=True)
+def pcg_jacobi(indptr, indices, data, b, x0, rtol, atol, maxiter):
+    """Solve A x = b (A symmetric positive definite, CSR, diagonal stored first in each row)."""
+    n = b.size
+    x, r, dinv, thresh, zero = _start(indptr, indices, data, _diag_first(indptr, indices, data), b, x0, rtol, atol)
+    if zero:
+        return x, 0, 0
+    z = np.empty(n)
+    p = np.empty(n)
+    q = np.empty(n)
+    rho_prev = 1.0
+    for it in range(maxiter):
+        if math.sqrt(np.dot(r, r)) < thresh:
+            return x, it, 0
+        for i in range(n):
+            z[i] = dinv[i] * r[i]
+        rho = np.dot(r, z)
+        if it > 0:
+            beta = rho / rho_prev
+            for i in range(n):
+                p[i] = p[i] * beta + z[i]
+        else:
+            p[:] = z
+        csr_matvec(indptr, indices, data, p, q)
+        alpha = rho / np.dot(p, q)
+        for i in range(n):
+            x[i] += alpha * p[i]
+            r[i] -= alpha * q[i]
+        rho_prev = rho
+    return x, maxiter, maxiter
+
+
+@njit(cache=True)
+def _pair_matvec(indptr, indices, data, diag_v, pu, pv, qu, qv, do_u, do_v):
+    """qu = A_u pu and qv = A_v pv in one sweep; A_v = A_u with the diagonal (first entry of each
+    row) replaced by diag_v. Same summation order as :func:`csr_matvec` on either matrix."""
+    n = indptr.size - 1
+    for i in range(n):
+        k0 = indptr[i]
+        su = 0.0
+        sv = 0.0
+        if do_u:
+            su += data[k0] * pu[indices[k0]]
+        if do_v:
+            sv += diag_v[i] * pv[indices[k0]]
+        for k in range(k0 + 1, indptr[i + 1]):
+            a = data[k]
+            j = indices[k]
+            if do_u:
+                su += a * pu[j]
+            if do_v:
+                sv += a * pv[j]
+        qu[i] = su
+        qv[i] = sv
+
+
+@njit(cache=True)
+def pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
+    """Two Jacobi-CG solves, A_u x_u = b_u and A_v x_v = b_v, in lock-step (see module doc).
+
+    Returns (x_u, iterations_u, info_u, x_v, iterations_v, info_v)."""
+    n = bu.size
+    for i in range(n):
+        if indices[indptr[i]] != i:
+            raise ValueError("pcg_jacobi_pair: the diagonal must be the first entry of each row")
+    diag_u = _diag_first(indptr, indices, data)
+    xu, ru, dinvu, thu, zero_u = _start(indptr, indices, data, diag_u, bu, xu0, rtol, atol)
+    # A_v x for the initial residual: the pair product with the u side switched off
+    xv = xv0.copy()
+    bnv = math.sqrt(np.dot(bv, bv))
+    thv = max(atol, rtol * bnv)
+    zero_v = bnv == 0.0
+    rv = np.empty(n)
+    dinvv = np.empty(n)
+    if zero_v:
+        xv = bv.copy()
+    else:
+        if _any_nonzero(xv):
+            _pair_matvec(indptr, indices, data, diag_v, xv, xv, rv, rv, False, True)
+            for i in range(n):
+                rv[i] = bv[i] - rv[i]
+        else:
+            rv[:] = bv
+        for i in range(n):
+            dinvv[i] = 1.0 / diag_v[i]
+    zu = np.empty(n)
+    zv = np.empty(n)
+    pu = np.empty(n)
+    pv = np.empty(n)
+    qu = np.empty(n)
+    qv = np.empty(n)
+    run_u = not zero_u
+    run_v = not zero_v
+    it_u = 0
+    it_v = 0
+    info_u = 0
+    info_v = 0
+    rho_u = 1.0
+    rho_v = 1.0
+    for it in range(maxiter):
+        if run_u and math.sqrt(np.dot(ru, ru)) < thu:
+            run_u = False
+            it_u = it
+        if run_v and math.sqrt(np.dot(rv, rv)) < thv:
+            run_v = False
+            it_v = it
+        if not (run_u or run_v):
+            break
+        if run_u:
+            for i in range(n):
+                zu[i] = dinvu[i] * ru[i]
+            rho = np.dot(ru, zu)
+            if it > 0:
+                beta = rho / rho_u
+                for i in range(n):
+                    pu[i] = pu[i] * beta + zu[i]
+            else:
+                pu[:] = zu
+            rho_u = rho
+        if run_v:
+            for i in range(n):
+                zv[i] = dinvv[i] * rv[i]
+            rho = np.dot(rv, zv)
+            if it > 0:
+                beta = rho / rho_v
+                for i in range(n):
+                    pv[i] = pv[i] * beta + zv[i]
+            else:
+                pv[:] = zv
+            rho_v = rho
+        _pair_matvec(indptr, indices, data, diag_v, pu, pv, qu, qv, run_u, run_v)
+        if run_u:
+            alpha = rho_u / np.dot(pu, qu)
+            for i in range(n):
+                xu[i] += alpha * pu[i]
+                ru[i] -= alpha * qu[i]
+        if run_v:
+            alpha = rho_v / np.dot(pv, qv)
+            for i in range(n):
+                xv[i] += alpha * pv[i]
+                rv[i] -= alpha * qv[i]
+    else:
+        if run_u:
+            it_u = maxiter
+            info_u = maxiter
+        if run_v:
+            it_v = maxiter
+            info_v = maxiter
+    return xu, it_u, info_u, xv, it_v, info_v
+
+
+# ------------------------------------------------------------------------------------------------
+# CG preconditioned with the diagonal incomplete Cholesky factorisation (DIC), Eisenstat's trick
+#
+# A = L + D + Lᵀ; W = D̃ + L with D̃ chosen so that diag(W D̃⁻¹ Wᵀ) = diag(A):
+# d̃_i = a_ii − Σ_{k<i} a_ik² / d̃_k (no fill-in: only the diagonal changes). M = W D̃⁻¹ Wᵀ.
+# PCG on A with M equals CG on Â = W⁻¹ A W⁻ᵀ with the preconditioner D̃ (Â ≈ D̃⁻¹), and
+# Â p = t + W⁻¹(p + K t), t = W⁻ᵀ p, K = D − 2 D̃ (Eisenstat 1981): one forward and one backward
+# sweep over the off-diagonal entries per iteration, the cost of one matrix-vector product.
+# Stopping rule (at least as strict as scipy's): ‖b − A x‖₂ < max(rtol ‖b‖₂, atol) for the
+# true residual of the returned x, checked whenever the transformed residual predicts it.
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def split_triangles(indptr, indices, data):
+    """Strict lower and upper parts of a CSR matrix (own CSR arrays) and its diagonal."""
+    n = indptr.size - 1
+    lp = np.zeros(n + 1, np.int64)
+    up = np.zeros(n + 1, np.int64)
+    diag = np.zeros(n)
+    for i in range(n):
+        cl = 0
+        cu = 0
+        for k in range(indptr[i], indptr[i + 1]):
+            j = indices[k]
+            if j < i:
+                cl += 1
+            elif j > i:
+                cu += 1
+        lp[i + 1] = lp[i] + cl
+        up[i + 1] = up[i] + cu
+    li = np.empty(lp[n], np.int64)
+    lv = np.empty(lp[n])
+    ui = np.empty(up[n], np.int64)
+    uv = np.empty(up[n])
+    for i in range(n):
+        a = lp[i]
+        b = up[i]
+        for k in range(indptr[i], indptr[i + 1]):
+            j = indices[k]
+            if j < i:
+                li[a] = j
+                lv[a] = data[k]
+                a += 1
+            elif j > i:
+                ui[b] = j
+                uv[b] = data[k]
+                b += 1
+            else:
+                diag[i] += data[k]
+    return lp, li, lv, up, ui, uv, diag
+
+
+@njit(cache=True)
+def dic_diagonal(lp, li, lv, diag):
+    """d̃_i = a_ii − Σ_{k<i} a_ik² / d̃_k. Returns (d̃, i) with i the first row with a pivot that
+    is not positive (the factorisation broke down: A not positive definite enough), else -1."""
+    n = diag.size
+    dt = np.empty(n)
+    for i in range(n):
+        s = diag[i]
+        for k in range(lp[i], lp[i + 1]):
+            s -= lv[k] * lv[k] / dt[li[k]]
+        if not s > 0.0:
+            return dt, i
+        dt[i] = s
+    return dt, -1
+
+
+@njit(cache=True)
+def _lower_solve(lp, li, lv, dinv, s, out):
+    """out = (D̃ + L)⁻¹ s (dinv = 1/d̃)."""
+    for i in range(s.size):
+        acc = s[i]
+        for k in range(lp[i], lp[i + 1]):
+            acc -= lv[k] * out[li[k]]
+        out[i] = acc * dinv[i]
+
+
+@njit(cache=True)
+def _upper_solve(up, ui, uv, dinv, s, out):
+    """out = (D̃ + U)⁻¹ s (U = Lᵀ)."""
+    for i in range(s.size - 1, -1, -1):
+        acc = s[i]
+        for k in range(up[i], up[i + 1]):
+            acc -= uv[k] * out[ui[k]]
+        out[i] = acc * dinv[i]
+
+
+@njit(cache=True)
+def _eisenstat_product(lp, li, lv, up, ui, uv, dinv, kd, p, t, w, q):
+    """q = Â p = t + W⁻¹(p + K t), t = W⁻ᵀ p (w: work array for W⁻¹(p + K t))."""
+    _upper_solve(up, ui, uv, dinv, p, t)
+    for i in range(p.size):
+        acc = p[i] + kd[i] * t[i]
+        for k in range(lp[i], lp[i + 1]):
+            acc -= lv[k] * w[li[k]]
+        w[i] = acc * dinv[i]
+        q[i] = w[i] + t[i]
+
+
+@njit(cache=True)
+def _residual(indptr, indices, data, b, x, r):
+    csr_matvec(indptr, indices, data, x, r)
+    for i in range(b.size):
+        r[i] = b[i] - r[i]
+    return math.sqrt(np.dot(r, r))
+
+
+@njit(cache=True)
+def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter):
+    """Solve A x = b (A symmetric positive definite, CSR, any entry order) by DIC-preconditioned
+    CG (Eisenstat form, see above), warm-started from x0. Returns (x, iterations, info), info = -1
+    when the incomplete factorisation breaks down (non-positive pivot; x = x0)."""
+    n = b.size
+    thresh = max(atol, rtol * math.sqrt(np.dot(b, b)))
+    x = x0.copy()
+    r = np.empty(n)
+    if math.sqrt(np.dot(b, b)) == 0.0:
+        return b.copy(), 0, 0
+    if _any_nonzero(x):
+        nr = _residual(indptr, indices, data, b, x, r)
+    else:
+        r[:] = b
+        nr = math.sqrt(np.dot(r, r))
+    if nr < thresh:
+        return x, 0, 0
+    lp, li, lv, up, ui, uv, diag = split_triangles(indptr, indices, data)
+    dt, bad = dic_diagonal(lp, li, lv, diag)
+    if bad >= 0:
+        return x, 0, -1  # breakdown: the caller falls back to a direct solve
+    kd = np.empty(n)
+    dinv = np.empty(n)
+    for i in range(n):
+        kd[i] = diag[i] - 2.0 * dt[i]
+        dinv[i] = 1.0 / dt[i]
+    rh = np.empty(n)  # transformed residual W⁻¹ r of the correction e (x = x0 + W⁻ᵀ ê)
+    _lower_solve(lp, li, lv, dinv, r, rh)
+    eh = np.zeros(n)
+    z = np.empty(n)
+    p = np.empty(n)
+    q = np.empty(n)
+    t = np.empty(n)
+    s = np.empty(n)
+    e = np.empty(n)
+    xt = np.empty(n)
+    scale = nr / math.sqrt(np.dot(rh, rh))  # ‖r‖ / ‖r̂‖, refreshed at every true-residual check
+    rho_prev = 1.0
+    for it in range(maxiter):
+        for i in range(n):
+            z[i] = dt[i] * rh[i]
+        rho = np.dot(rh, z)
+        if it > 0:
+            beta = rho / rho_prev
+            for i in range(n):
+                p[i] = p[i] * beta + z[i]
+        else:
+            p[:] = z
+        _eisenstat_product(lp, li, lv, up, ui, uv, dinv, kd, p, t, s, q)
+        alpha = rho / np.dot(p, q)
+        for i in range(n):
+            eh[i] += alpha * p[i]
+            rh[i] -= alpha * q[i]
+        rho_prev = rho
+        nrh = math.sqrt(np.dot(rh, rh))
+        if scale * nrh < thresh:
+            _upper_solve(up, ui, uv, dinv, eh, e)
+            for i in range(n):
+                xt[i] = x[i] + e[i]
+            nr = _residual(indptr, indices, data, b, xt, r)
+            if nr < thresh:
+                return xt, it + 1, 0
+            scale = nr / max(nrh, 1e-300)
+    _upper_solve(up, ui, uv, dinv, eh, e)
+    for i in range(n):
+        x[i] += e[i]
+    return x, maxiter, maxiter
+
+
+@njit(cache=True)
+def _pair_eisenstat_product(lp, li, lv, up, ui, uv, dinv_u, dinv_v, kd_u, kd_v, pu, pv, tu, tv, wu, wv, qu, qv):
+    """:func:`_eisenstat_product` for the u and v systems in one pair of sweeps (shared
+    off-diagonal entries; per side the same operations in the same order)."""
+    n = pu.size
+    for i in range(n - 1, -1, -1):
+        au = pu[i]
+        av = pv[i]
+        for k in range(up[i], up[i + 1]):
+            a = uv[k]
+            j = ui[k]
+            au -= a * tu[j]
+            av -= a * tv[j]
+        tu[i] = au * dinv_u[i]
+        tv[i] = av * dinv_v[i]
+    for i in range(n):
+        au = pu[i] + kd_u[i] * tu[i]
+        av = pv[i] + kd_v[i] * tv[i]
+        for k in range(lp[i], lp[i + 1]):
+            a = lv[k]
+            j = li[k]
+            au -= a * wu[j]
+            av -= a * wv[j]
+        wu[i] = au * dinv_u[i]
+        qu[i] = wu[i] + tu[i]
+        wv[i] = av * dinv_v[i]
+        qv[i] = wv[i] + tv[i]
+
+
+@njit(cache=True)
+def _side_residual(indptr, indices, data, diag_v, is_v, b, x, r):
+    """‖b − A x‖ for the u matrix (``data``) or the v matrix (``data`` with diagonal ``diag_v``)."""
+    if is_v:
+        _pair_matvec(indptr, indices, data, diag_v, x, x, r, r, False, True)
+        for i in range(b.size):
+            r[i] = b[i] - r[i]
+        return math.sqrt(np.dot(r, r))
+    return _residual(indptr, indices, data, b, x, r)
+
+
+@njit(cache=True)
+def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
+    """:func:`pcg_dic` on the u and v viscous systems in lock-step (A_v = A_u with diagonal
+    ``diag_v``; diagonal first in each row): each side gives the same result as its own
+    :func:`pcg_dic` call, bit for bit, with one traversal of the off-diagonal entries per
+    iteration for both. Returns (x_u, iterations_u, info_u, x_v, iterations_v, info_v)."""
+    n = bu.size
+    for i in range(n):
+        if indices[indptr[i]] != i:
+            raise ValueError("pcg_dic_pair: the diagonal must be the first entry of each row")
+    bs = (bu, bv)
+    xs = (xu0.copy(), xv0.copy())
+    its = np.zeros(2, np.int64)
+    infos = np.zeros(2, np.int64)
+    run = np.zeros(2, np.bool_)
+    thresh = np.zeros(2)
+    r = np.empty((2, n))
+    out = [bu.copy(), bv.copy()]
+    for s in range(2):
+        b = bs[s]
+        thresh[s] = max(atol, rtol * math.sqrt(np.dot(b, b)))
+        if math.sqrt(np.dot(b, b)) == 0.0:
+            out[s] = b.copy()
+            continue
+        if _any_nonzero(xs[s]):
+            nr = _side_residual(indptr, indices, data, diag_v, s == 1, b, xs[s], r[s])
+        else:
+            r[s, :] = b
+            nr = math.sqrt(np.dot(r[s], r[s]))
+        out[s] = xs[s].copy()
+        if not nr < thresh[s]:
+            run[s] = True
+    if not (run[0] or run[1]):
+        return out[0], 0, 0, out[1], 0, 0
+    lp, li, lv, up, ui, uv, diag_u = split_triangles(indptr, indices, data)
+    dts = (dic_diagonal(lp, li, lv, diag_u), dic_diagonal(lp, li, lv, diag_v))
+    dinv = np.ones((2, n))
+    kd = np.zeros((2, n))
+    diags = (diag_u, diag_v)
+    for s in range(2):
+        dt, bad = dts[s]
+        if run[s] and bad >= 0:
+            run[s] = False
+            infos[s] = -1  # breakdown: x = x0, the caller falls back to a direct solve
+            continue
+        if run[s]:
+            for i in range(n):
+                kd[s, i] = diags[s][i] - 2.0 * dt[i]
+                dinv[s, i] = 1.0 / dt[i]
+    rh = np.zeros((2, n))
+    eh = np.zeros((2, n))
+    z = np.empty(n)
+    p = np.zeros((2, n))
+    q = np.zeros((2, n))
+    t = np.zeros((2, n))
+    w = np.zeros((2, n))
+    e = np.empty(n)
+    xt = np.empty(n)
+    scale = np.ones(2)
+    rho_prev = np.ones(2)
+    for s in range(2):
+        if run[s]:
+            _lower_solve(lp, li, lv, dinv[s], r[s], rh[s])
+            scale[s] = math.sqrt(np.dot(r[s], r[s])) / math.sqrt(np.dot(rh[s], rh[s]))
+    rho = np.zeros(2)
+    for it in range(maxiter):
+        if not (run[0] or run[1]):
+            break
+        for s in range(2):
+            if not run[s]:
+                continue
+            dt = dts[s][0]
+            for i in range(n):
+                z[i] = dt[i] * rh[s, i]
+            rho[s] = np.dot(rh[s], z)
+            if it > 0:
+                beta = rho[s] / rho_prev[s]
+                for i in range(n):
+                    p[s, i] = p[s, i] * beta + z[i]
+            else:
+                p[s, :] = z
+        _pair_eisenstat_product(lp, li, lv, up, ui, uv, dinv[0], dinv[1], kd[0], kd[1], p[0], p[1], t[0], t[1],
+                                w[0], w[1], q[0], q[1])
+        for s in range(2):
+            if not run[s]:
+                continue
+            alpha = rho[s] / np.dot(p[s], q[s])
+            for i in range(n):
+                eh[s, i] += alpha * p[s, i]
+                rh[s, i] -= alpha * q[s, i]
+            rho_prev[s] = rho[s]
+            nrh = math.sqrt(np.dot(rh[s], rh[s]))
+            if scale[s] * nrh < thresh[s]:
+                _upper_solve(up, ui, uv, dinv[s], eh[s], e)
+                for i in range(n):
+                    xt[i] = xs[s][i] + e[i]
+                nr = _side_residual(indptr, indices, data, diag_v, s == 1, bs[s], xt, r[s])
+                if nr < thresh[s]:
+                    out[s] = xt.copy()
+                    its[s] = it + 1
+                    run[s] = False
+                else:
+                    scale[s] = nr / max(nrh, 1e-300)
+    for s in range(2):
+        if run[s]:
+            _upper_solve(up, ui, uv, dinv[s], eh[s], e)
+            for i in range(n):
+                out[s][i] = xs[s][i] + e[i]
+            its[s] = maxiter
+            infos[s] = maxiter
+    return out[0], its[0], infos[0], out[1], its[1], infos[1]
