@@ -5,7 +5,7 @@ for bit, u/v in lock-step) and DIC-preconditioned CG ("cg_dic"), all warm-starte
 time of T22-A70 at dx = 4 mm to rest (``--full``, solver ``--full-solver``).
 
 Run: NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/bench_isph.py [--steps 100] [--solvers cg,cg_dic,direct]
-     [--full [--full-solver cg]]
+     [--full [--full-solver cg_dic]]
 Targets (issue 3, one core): <= 8 ms/step at ~4000 particles; T22-A70 to rest <= 60 s.
 
 Measured 2026-11-22 on the shared 2-core AMD EPYC under load (load average 1.5-4; minimum of
@@ -59,7 +59,7 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=100)
     ap.add_argument("--full", action="store_true", help="also run T22-A70 at dx = 4 mm to rest")
     ap.add_argument("--solvers", default="cg,cg_dic,direct", help="comma-separated solvers to time per step")
-    ap.add_argument("--full-solver", default="cg", help="solver (PPE and viscous) of the --full run")
+    ap.add_argument("--full-solver", default="cg_dic", help="solver (PPE and viscous) of the --full run")
     args = ap.parse_args()
     print(f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', '(unset)')}")
     t0 = time.perf_counter()
