@@ -364,24 +364,65 @@ def build_summary(regression=None, compare=None, verification=(), benchmarks=Non
     return "\n".join(parts)
 
 
+
+def _wm_numbers(folder: Path) -> str:
+    import xarray as xr
+    parts = []
+    for f in sorted(folder.glob("*.nc")):
+        with xr.open_dataset(f) as ds:
+            if "rms_deviation" not in ds:
+                continue
+            r = ds["rms_deviation"]
+            txt = ", ".join(f"{float(np.nanmax(r.sel(width_factor=w).values)):.3f} ({w:g} dx)"
+                            for w in r["width_factor"].values if w != ds.attrs.get("wm_reference", 2.0)
+                            and np.isfinite(r.sel(width_factor=w).values).any())
+            parts.append(f"{ds.attrs.get('case', f.stem)}: max RMS {txt}")
+    return "; ".join(parts)
+
+
+def _late_depth(path: Path, t_s_from: float) -> str:
+    import xarray as xr
+    with xr.open_dataset(path) as ds:
+        ts = ds["t_s"].values
+        sel = ts > t_s_from
+        if not sel.any():
+            return f"{ds.attrs.get('case', path.stem)}: no output after t_s = {t_s_from:g}"
+        h = ds["total_depth"].values[:, sel] / float(ds.attrs["H0"])
+        last = h[:, -1]
+        return (f"{ds.attrs.get('case', path.stem)} at t_s = {ts[sel][-1]:.1f}: h_T/H0 from "
+                f"{np.nanmin(last):.2f} to {np.nanmax(last):.2f} along the slope")
+
+
 def caption_numbers(results) -> dict:
     """Short 'our number' sentences for the report captions (workflow/report/*.rst), read from the
-    outputs under ``results``; a missing output gives "not computed yet (...)". The Snakefile puts
-    this dict into ``config["_caption_numbers"]`` when it is parsed, so ``snakemake --report``
-    quotes the numbers of the files it reports on."""
+    outputs under ``results``; a missing output gives "not computed yet (...)". Written by the
+    summary rule to ``results/caption_numbers.json``, which the workflow reads into
+    ``config["_caption_numbers"]`` when it is parsed, so ``snakemake --report`` quotes the files it
+    reports on. No '|' in the text: the captions are reStructuredText."""
     root = Path(results)
     nums: dict[str, str] = {}
 
     def missing(what):
         return f"not computed yet ({what} missing)"
 
+    def guard(key, fn, what):
+        try:
+            nums[key] = fn()
+        except (OSError, KeyError, ValueError, IndexError) as exc:  # a caption never blocks the report
+            nums[key] = f"{missing(what)}: {exc}"
+
     t3 = _read_csv(root / "regression" / "table3_comparison.csv")
     if t3 is not None and len(t3):
-        nums["table3"] = (f"mean |(t_s)_C difference| from Table 3: {_pct_mean(t3.get('rel_diff_pct', pd.Series(dtype=float)))} "
-                          f"(onset), {_pct_mean(t3.get('rel_diff_fit_pct', pd.Series(dtype=float)))} (fit intercept) "
+        empty = pd.Series(dtype=float)
+        nums["table3"] = (f"mean absolute (t_s)_C difference from Table 3: {_pct_mean(t3.get('rel_diff_pct', empty))} "
+                          f"(onset), {_pct_mean(t3.get('rel_diff_fit_pct', empty))} (fit intercept) "
                           f"over {len(t3)} (case, [x]) pairs")
+        row = t3[(t3["case"] == "T22-A70") & np.isclose(t3["x_norm"], 0.2)] if "x_norm" in t3 else t3.iloc[:0]
+        nums["fig10"] = (f"T22-A70 at [x] = 0.2: (t_s)_C = {_fmt(row['t_s_critical'].iloc[0], '.2f')} "
+                         f"(paper {_fmt(row['t_s_critical_paper'].iloc[0], '.2f')})" if len(row)
+                         else "T22-A70 at [x] = 0.2 not in the Table 3 comparison")
     else:
-        nums["table3"] = missing("regression/table3_comparison.csv")
+        nums["table3"] = nums["fig10"] = missing("regression/table3_comparison.csv")
     t5 = _read_csv(root / "regression" / "table5_comparison.csv")
     if t5 is not None and len(t5):
         nums["table5"] = "; ".join(f"a = {r.a:g}: A = {_fmt(r.A, '.4f')} (paper {_fmt(r.A_paper, '.4f')}), "
@@ -392,7 +433,7 @@ def caption_numbers(results) -> dict:
     cmp = _read_csv(root / "compare" / "comparison.csv")
     if cmp is not None and len(cmp):
         mx = max_errors(cmp)
-        nums["fig16"] = "; ".join(f"{r.variant}, {r.quantity.replace('_', ' ')}: max |error| "
+        nums["fig16"] = "; ".join(f"{r.variant}, {r.quantity.replace('_', ' ')}: largest absolute error "
                                   f"{100 * r.max_abs_rel_error:.0f} % at {r.case} (paper {100 * r.paper_max_error:.0f} %)"
                                   for r in mx.itertuples()) if not mx.empty else "no comparable case"
         ref = cmp.drop_duplicates("case").sort_values("a")
@@ -401,9 +442,36 @@ def caption_numbers(results) -> dict:
         if "reference_flow_time_norm" in ref:
             nums["fig7"] = "flow times of the 22° 2D runs t_F/t_c = " + ", ".join(
                 f"{_fmt(r.reference_flow_time_norm, '.1f')} (a = {r.a:g})" for r in ref.itertuples())
+        dep = cmp[cmp["variant"] == "deposition"].sort_values("a")
+        nums["fig17"] = "DA with deposition ΔL∞/L0 = " + ", ".join(
+            f"{_fmt(r.final_runout_norm, '.2f')} ({r.case})" for r in dep.itertuples())
     else:
-        nums["fig16"] = nums["fig15"] = missing("compare/comparison.csv")
+        nums["fig16"] = nums["fig15"] = nums["fig17"] = missing("compare/comparison.csv")
     nums.setdefault("fig7", missing("compare/comparison.csv"))
+    run = root / "isph" / "T22-A70.nc"
+    if run.is_file():
+        def fig5():
+            import xarray as xr
+            from .figures.isph2d import failure_plane_angle
+            with xr.open_dataset(run) as ds:
+                angle, t = failure_plane_angle(ds, 1.0)
+                rest = float(ds["time_to_rest"].values)
+                tc = float(ds.attrs["t_c"])
+            return (f"failure plane {angle:.1f}° from the bed at t = {t:.2f} s ({angle + 22.0:.1f}° from the "
+                    f"horizontal); time to rest {rest:.2f} s (t_s = {rest / tc:.1f})")
+        guard("fig5", fig5, "isph/T22-A70.nc")
+    else:
+        nums["fig5"] = missing("isph/T22-A70.nc")
+    secs = [(root / "sections" / f"{c}.nc", t) for c, t in (("T16-A50", 6.0), ("T22-A70", 9.0))]
+    if all(p.is_file() for p, _ in secs):
+        guard("fig8", lambda: "; ".join(_late_depth(p, t) for p, t in secs), "sections")
+    else:
+        nums["fig8"] = missing("sections/T16-A50.nc, T22-A70.nc")
+    if (root / "wm").is_dir():
+        guard("figA2", lambda: _wm_numbers(root / "wm") or "no W_M file", "wm")
+    else:
+        nums["figA2"] = missing("wm/")
+    nums["figA1"] = nums["figA2"]
     sens = _read_csv(root / "sensitivity" / "sensitivity.csv")
     if sens is not None and len(sens) and "final_runout_norm" in sens:
         parts = []
@@ -415,9 +483,11 @@ def caption_numbers(results) -> dict:
         nums["sensitivity"] = missing("sensitivity/sensitivity.csv; run `snakemake -j2 sensitivity`")
     conv = root / "convergence" / "isph"
     if conv.is_dir() and any(conv.glob("*.nc")):
-        iso = _study_rows_isph(conv).sort_values("dx_mm", ascending=False)
-        nums["convergence"] = "2D ΔL∞/L0 = " + ", ".join(
-            f"{_fmt(r.get('final_runout_norm'), '.2f')} (dx = {r['dx_mm']:.0f} mm)" for _, r in iso.iterrows())
+        def convergence():
+            iso = _study_rows_isph(conv).sort_values("dx_mm", ascending=False)
+            return "2D ΔL∞/L0 = " + ", ".join(f"{_fmt(r.get('final_runout_norm'), '.2f')} (dx = {r['dx_mm']:.0f} mm)"
+                                              for _, r in iso.iterrows())
+        guard("convergence", convergence, "convergence/isph")
     else:
         nums["convergence"] = missing("convergence/isph; run `snakemake -j2 convergence`")
     return nums

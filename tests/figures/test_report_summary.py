@@ -111,13 +111,25 @@ def test_caption_numbers_from_outputs_and_rendered_in_captions(inputs, tmp_path)
     Path(inputs["compare"]).rename(root / "compare" / "comparison.csv")
     nums = caption_numbers(root)
     assert "3.0 % (onset), 5.1 % (fit intercept) over 1" in nums["table3"]
+    assert nums["fig10"] == "T22-A70 at [x] = 0.2: (t_s)_C = 8.14 (paper 7.90)"
     assert nums["table5"] == "a = 0.7: A = -0.0271 (paper -0.0313), B = 0.0533 (paper 0.0402)"
-    assert "no deposition, runout: max |error| 50 % at 1D-A70 (paper 55 %)" in nums["fig16"]
-    assert "deposition, runout: max |error| 20 % at 1D-A70 (paper 17 %)" in nums["fig16"]
+    assert "no deposition, runout: largest absolute error 50 % at 1D-A70 (paper 55 %)" in nums["fig16"]
+    assert "deposition, runout: largest absolute error 20 % at 1D-A70 (paper 17 %)" in nums["fig16"]
+    assert not any("|" in v for v in nums.values())  # reStructuredText substitution syntax
     assert nums["sensitivity"].startswith("not computed yet") and nums["convergence"].startswith("not computed yet")
     caption = (Path(__file__).resolve().parents[2] / "workflow" / "report" / "fig16.rst").read_text()
     text = jinja2.Environment().from_string(caption).render(
         snakemake=SimpleNamespace(config={"_caption_numbers": nums}))
-    assert "max |error| 50 % at 1D-A70 (paper 55 %)" in text
+    assert "largest absolute error 50 % at 1D-A70 (paper 55 %)" in text
     # without numbers (config key absent) the caption still renders
     assert "not computed yet" in jinja2.Environment().from_string(caption).render(snakemake=SimpleNamespace(config={}))
+
+
+def test_cli_writes_caption_numbers(inputs, tmp_path):
+    import json
+    out = tmp_path / "caps.json"
+    rc = main(["summary", "-o", str(tmp_path / "s.md"), "--caption-numbers", str(out), "--results", str(tmp_path)])
+    assert rc == 0
+    nums = json.loads(out.read_text())
+    assert {"table3", "table5", "fig5", "fig7", "fig8", "fig10", "fig15", "fig16", "fig17", "figA1", "figA2",
+            "convergence", "sensitivity"} <= set(nums)

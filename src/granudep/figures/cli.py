@@ -47,6 +47,12 @@ def _cmd_summary(args) -> int:
                          convergence=args.convergence, sensitivity=args.sensitivity)
     write_text(text, args.output)
     LOG.info("summary written to %s", args.output)
+    if args.caption_numbers:
+        import json
+        from ..report import caption_numbers
+        write_text(json.dumps(caption_numbers(args.results), indent=1, ensure_ascii=False) + "\n",
+                   args.caption_numbers)
+        LOG.info("report caption numbers written to %s", args.caption_numbers)
     return 0
 
 
@@ -92,6 +98,9 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, metavar="summary.md")
     p.add_argument("--regression", metavar="DIR", help="granudep regress output folder")
     p.add_argument("--convergence", metavar="DIR", help="convergence study folder (isph/, regression/, da/)")
+    p.add_argument("--caption-numbers", metavar="JSON",
+                   help="also write our numbers for the report captions (read from --results) to this file")
+    p.add_argument("--results", metavar="DIR", default="results", help="results folder for --caption-numbers")
     p.add_argument("--sensitivity", metavar="CSV", help="sensitivity study table")
     p.add_argument("--compare", metavar="CSV", help="granudep compare output")
     p.add_argument("--verification", nargs="*", metavar="CSV", help="granudep verify outputs")
