@@ -480,7 +480,7 @@ def caption_numbers(results) -> dict:
             parts.append(f"{p} {g['value'].min():g}–{g['value'].max():g}: DA ΔL/L0 {r.min():.2f}–{r.max():.2f}")
         nums["sensitivity"] = "; ".join(parts)
     else:
-        nums["sensitivity"] = missing("sensitivity/sensitivity.csv; run `snakemake -j2 sensitivity`")
+        nums["sensitivity"] = "not computed yet (sensitivity/sensitivity.csv missing: run `snakemake -j2 sensitivity`)"
     conv = root / "convergence" / "isph"
     if conv.is_dir() and any(conv.glob("*.nc")):
         def convergence():
@@ -489,5 +489,5 @@ def caption_numbers(results) -> dict:
                                               for _, r in iso.iterrows())
         guard("convergence", convergence, "convergence/isph")
     else:
-        nums["convergence"] = missing("convergence/isph; run `snakemake -j2 convergence`")
+        nums["convergence"] = "not computed yet (convergence/isph missing: run `snakemake -j2 convergence`)"
     return nums
