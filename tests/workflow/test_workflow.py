@@ -112,7 +112,7 @@ def test_slurm_profile_dry_runs(workdir):
 
 @pytest.mark.parametrize("target, rule, count", [
     ("convergence", "convergence_isph", 3),
-    ("sensitivity", "sensitivity_da", 9),
+    ("sensitivity", "sensitivity_da", 11),  # baseline + 2 values x 5 parameters
 ])
 def test_extra_study_targets_dry_run(workdir, target, rule, count):
     rc, out, jobs = dry_run(workdir, "-j2", target)

@@ -1,15 +1,17 @@
 # Sensitivity study (beyond the paper; issue 5): one parameter at a time away from its paper value
 # -> its effect on A, B (eq 36) and on the DA runout. Target `sensitivity`, not in `all`.
 #   phi_internal_deg, phi_basal_deg: rerun the 2D case (coarser dx) and the DA case with the angle
+#   free_surface_threshold: rerun the 2D case with the ISPH free-surface ∇·r threshold (paper 1.6)
 #   critical_speed, divergence_threshold: re-monitor the baseline 2D run (eq 16 threshold, 0.1 m/s)
 # Each run is named {sens} = "baseline" or "{parameter}_{value}".
 
 SENS = config["sensitivity"]
 SENS_DIR = f"{RESULTS}/sensitivity"
-SENS_PARAMS = ("phi_internal_deg", "phi_basal_deg", "critical_speed", "divergence_threshold")
+SENS_PARAMS = ("phi_internal_deg", "phi_basal_deg", "critical_speed", "divergence_threshold", "free_surface_threshold")
 SENS_RUNS = ["baseline"] + [f"{p}_{v}" for p in SENS_PARAMS for v in SENS.get(p, [])]
 # which config key of each stage a sensitivity parameter sets (plumbing only; defaults in the code)
-SENS_ISPH_KEYS = {"phi_internal_deg": ("material", "phi_deg"), "phi_basal_deg": ("wall", "phi_wall_deg")}
+SENS_ISPH_KEYS = {"phi_internal_deg": ("material", "phi_deg"), "phi_basal_deg": ("wall", "phi_wall_deg"),
+                  "free_surface_threshold": ("numerics", "free_surface_threshold")}
 SENS_DA_KEYS = {"phi_internal_deg": ("material", "phi_internal_deg"), "phi_basal_deg": ("material", "phi_basal_deg")}
 SENS_MONITOR_OPTIONS = {"critical_speed": "--critical-speed", "divergence_threshold": "--interface-threshold"}
 

@@ -125,7 +125,8 @@ QUANTITIES = {"A": "A (–)", "B": "B (–)", "final_runout_norm": "DA final run
 # axis labels of the swept parameters (config keys of the `sensitivity:` section); others as named
 PARAMETERS = {"phi_internal_deg": "internal friction angle φ_I (°)", "phi_basal_deg": "basal friction angle φ_B (°)",
               "critical_speed": "critical (deposition) speed (m/s)",
-              "divergence_threshold": "F/D interface threshold ∇·r (–)"}
+              "divergence_threshold": "F/D interface threshold ∇·r (–)",
+              "free_surface_threshold": "ISPH free-surface threshold ∇·r (–)"}
 
 
 def sensitivity(tables):
