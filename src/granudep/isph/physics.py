@@ -39,17 +39,6 @@ def _gw(r, h):
 
 
 @njit(cache=True, inline="always")
-def wall_beta(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
-    """Morris wall-velocity factor β (u_i − u_w = β u_i for the tangential component)."""
-    if slip == SLIP_FREE:
-        return 0.0
-    di = max(nx * xi + ny * yi - c, 0.25 * dx)
-    dw = max(c - (nx * xw + ny * yw), 0.0)
-    b = slip_length if slip == SLIP_NAVIER else 0.0
-    return min(1.5, (di + dw) / (di + b))
-
-
-@njit(cache=True, inline="always")
 def wall_beta_linear(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
     """β of the linear extrapolation u_w = u_i (b − d_w)/(d_i + b) (no cap; d_i floored at dx/4):
     u_i − u_w = β u_i for the tangential component (velocity gradient of the rheology)."""
@@ -59,6 +48,13 @@ def wall_beta_linear(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
     dw = max(c - (nx * xw + ny * yw), 0.0)
     b = slip_length if slip == SLIP_NAVIER else 0.0
     return (di + dw) / (di + b)
+
+
+@njit(cache=True, inline="always")
+def wall_beta(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
+    """Morris wall-velocity factor β (u_i − u_w = β u_i for the tangential component): the linear
+    extrapolation capped at 1.5 (Morris et al. 1997; viscous operator)."""
+    return min(1.5, wall_beta_linear(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx))
 
 
 MEAN_HARMONIC, MEAN_GEOMETRIC, MEAN_ARITHMETIC = 0, 1, 2
