@@ -36,7 +36,15 @@ def _cells(x, y, cell, period, xmin, ymin, ncx, ncy):
     return cid, counts, order
 
 
-BUF_WIDTH = 64  # neighbours remembered per particle in pass 1 (about 21 on the lattice, h = 1.3 dx)
+@njit(cache=True, inline="always")
+def _minimum_image(ddx, period, half):
+    """x separation under the periodic minimum-image convention (unchanged when period <= 0)."""
+    if period > 0.0:
+        if ddx > half:
+            return ddx - period
+        if ddx < -half:
+            return ddx + period
+    return ddx
 
 
 @njit(cache=True)
@@ -61,11 +69,15 @@ def build_neighbours(x, y, nf, radius, period):
     cid, counts, order = _cells(x, y, cell, period, xmin, ymin, ncx, ncy)
     r2max = radius * radius
     half = 0.5 * period
-    # pass 1: count, remembering up to BUF_WIDTH accepted neighbours per particle so that pass 2
-    # revisits only those (same order, same arithmetic: the list is identical either way)
+    # one distance search: the accepted neighbours of particle i go to its row of ``buf``, whose width
+    # bounds any particle's neighbour count (all neighbours lie in the 3 x 3 block of cells); then
+    # the CSR list is filled from ``buf`` in the same order
+    width = 0
+    for c in range(ncx * ncy):
+        width = max(width, counts[c + 1] - counts[c])
+    width *= 9
     start = np.zeros(nf + 1, np.int64)
-    buf = np.empty(nf * BUF_WIDTH, np.int32)
-    overflow = False
+    buf = np.empty(nf * width, np.int32)
     for i in range(nf):
         ci = cid[i] // ncy
         cj = cid[i] % ncy
@@ -87,77 +99,26 @@ def build_neighbours(x, y, nf, radius, period):
                     j = order[s]
                     if j == i:
                         continue
-                    ddx = x[i] - x[j]
-                    if period > 0.0:
-                        if ddx > half:
-                            ddx -= period
-                        elif ddx < -half:
-                            ddx += period
+                    ddx = _minimum_image(x[i] - x[j], period, half)
                     ddy = y[i] - y[j]
                     if ddx * ddx + ddy * ddy < r2max:
-                        if cnt < BUF_WIDTH:
-                            buf[i * BUF_WIDTH + cnt] = j
+                        buf[i * width + cnt] = j
                         cnt += 1
-        if cnt > BUF_WIDTH:
-            overflow = True
         start[i + 1] = start[i] + cnt
     m = start[nf]
     nbr = np.empty(m, np.int64)
     rx = np.empty(m)
     ry = np.empty(m)
     rr = np.empty(m)
-    if not overflow:
-        for i in range(nf):
-            k = start[i]
-            for c in range(start[i + 1] - start[i]):
-                j = buf[i * BUF_WIDTH + c]
-                ddx = x[i] - x[j]
-                if period > 0.0:
-                    if ddx > half:
-                        ddx -= period
-                    elif ddx < -half:
-                        ddx += period
-                ddy = y[i] - y[j]
-                nbr[k] = j
-                rx[k] = ddx
-                ry[k] = ddy
-                rr[k] = np.sqrt(ddx * ddx + ddy * ddy)
-                k += 1
-        return start, nbr, rx, ry, rr
-    # pass 2 (a particle with more than BUF_WIDTH neighbours): fill by a second search
     for i in range(nf):
-        ci = cid[i] // ncy
-        cj = cid[i] % ncy
         k = start[i]
-        for dxc in range(-1, 2):
-            cx = ci + dxc
-            if period > 0.0:
-                if ncx < 3 and dxc != 0 and (ncx == 1 or dxc == 1):
-                    continue
-                cx = cx % ncx
-            elif cx < 0 or cx >= ncx:
-                continue
-            for dyc in range(-1, 2):
-                cy = cj + dyc
-                if cy < 0 or cy >= ncy:
-                    continue
-                c = cx * ncy + cy
-                for s in range(counts[c], counts[c + 1]):
-                    j = order[s]
-                    if j == i:
-                        continue
-                    ddx = x[i] - x[j]
-                    if period > 0.0:
-                        if ddx > half:
-                            ddx -= period
-                        elif ddx < -half:
-                            ddx += period
-                    ddy = y[i] - y[j]
-                    d2 = ddx * ddx + ddy * ddy
-                    if d2 < r2max:
-                        nbr[k] = j
-                        rx[k] = ddx
-                        ry[k] = ddy
-                        rr[k] = np.sqrt(d2)
-                        k += 1
+        for c in range(start[i + 1] - start[i]):
+            j = buf[i * width + c]
+            ddx = _minimum_image(x[i] - x[j], period, half)
+            ddy = y[i] - y[j]
+            nbr[k] = j
+            rx[k] = ddx
+            ry[k] = ddy
+            rr[k] = np.sqrt(ddx * ddx + ddy * ddy)
+            k += 1
     return start, nbr, rx, ry, rr
