@@ -71,7 +71,7 @@ class Rheology:
     viscosity: float = param(1.0, gt=0.0, unit="Pa s", doc="Newtonian dynamic viscosity (model = newtonian)")
     eta_max: float = param(5.0e3, gt=0.0, unit="Pa s",
                            doc="viscosity cap of the regularised Drucker-Prager/mu(I) law (quasi-rigid state)")
-    pair_mean: str = param("arithmetic", choices=("harmonic", "geometric", "arithmetic"),
+    pair_mean: str = param("stress", choices=("harmonic", "geometric", "arithmetic", "stress"),
                            doc="pair viscosity of the implicit viscous Laplacian")
     eta_min: float = param(1.0e-3, ge=0.0, unit="Pa s", doc="viscosity floor (p -> 0 at the free surface)")
 

@@ -57,13 +57,23 @@ def wall_beta(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
     return min(1.5, wall_beta_linear(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx))
 
 
-MEAN_HARMONIC, MEAN_GEOMETRIC, MEAN_ARITHMETIC = 0, 1, 2
-MEAN_CODES = {"harmonic": MEAN_HARMONIC, "geometric": MEAN_GEOMETRIC, "arithmetic": MEAN_ARITHMETIC}
+MEAN_HARMONIC, MEAN_GEOMETRIC, MEAN_ARITHMETIC, MEAN_STRESS = 0, 1, 2, 3
+MEAN_CODES = {"harmonic": MEAN_HARMONIC, "geometric": MEAN_GEOMETRIC, "arithmetic": MEAN_ARITHMETIC,
+              "stress": MEAN_STRESS}
 
 
 @njit(cache=True, inline="always")
-def pair_viscosity(ei, ej, mean):
-    """Pair viscosity η̄_ij of the variable-viscosity Laplacian."""
+def pair_viscosity(ei, ej, gi, gj, mean):
+    """Pair viscosity η̄_ij of the variable-viscosity Laplacian (gi, gj: shear rates |γ̇|).
+
+    ``stress``: the pair's mean stress over its mean shear rate, (η_i γ̇_i + η_j γ̇_j)/(γ̇_i + γ̇_j);
+    for a linear stress profile the pair flux then carries the midpoint stress.
+    """
+    if mean == MEAN_STRESS:
+        g = gi + gj
+        if g > 0.0:
+            return (ei * gi + ej * gj) / g
+        return 0.5 * (ei + ej)
     if mean == MEAN_HARMONIC:
         return 2.0 * ei * ej / (ei + ej + 1e-300)
     if mean == MEAN_GEOMETRIC:
@@ -201,7 +211,7 @@ def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
 
 
 @njit(cache=True)
-def assemble_viscous(start, nbr, rx, ry, rr, nf, h, vol, x, y, u, v, p, eta, wnx, wny, wc,
+def assemble_viscous(start, nbr, rx, ry, rr, nf, h, vol, x, y, u, v, p, eta, gdot, wnx, wny, wc,
                      slip, slip_length, mu_wall, dx, dt, rho, eps2, mean, gx, gy, eta_max, lap_norm, wall_ns,
                      wall_k):
     """Implicit viscous matrices A = I − Δt/ρ ∇·(η∇·) (Morris Laplacian, harmonic-mean η) as CSR.
@@ -237,7 +247,7 @@ def assemble_viscous(start, nbr, rx, ry, rr, nf, h, vol, x, y, u, v, p, eta, wnx
             r = rr[k]
             f = -_gw(r, h) * r * r / (r * r + eps2) / lap_norm
             if j < nf:
-                ebar = pair_viscosity(eta[i], eta[j], mean)
+                ebar = pair_viscosity(eta[i], eta[j], gdot[i], gdot[j], mean)
                 cij = fac * 2.0 * ebar * vol * f
                 indices[pos] = j
                 data[pos] = -cij

@@ -178,7 +178,7 @@ class IsphSolver:
                                                     rh.eta_min, rh.eta_max)
         t2 = _time.perf_counter()
         indptr, indices, data, diag_v = ph.assemble_viscous(start, nbr, rx, ry, rr, nf, h, vol, self.x, self.y,
-                                                    self.u, self.v, self.p_rheo, self.eta, P.wnx, P.wny, P.wc,
+                                                    self.u, self.v, self.p_rheo, self.eta, self.gdot, P.wnx, P.wny, P.wc,
                                                     self.slip, c.wall.slip_length, self.mu_wall, self.dx,
                                                     dt, rho, self.eps2, self.mean, self.gx, self.gy,
                                                     rh.eta_max, self.lap_norm, self.wall_ns, self.wall_k)
