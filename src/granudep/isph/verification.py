@@ -99,16 +99,26 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     """Steady uniform μ(I) flow down a periodic incline (no-slip bed): Bagnold profile
     u(y) = (2/3)(I_θ/d) sqrt(φ g cosθ) [h^{3/2} − (h−y)^{3/2}], I_θ = I0 (tanθ − μ_s)/(μ_2 − tanθ).
 
-    The layer starts from the analytic profile (from rest the flow needs ~5 s to develop: its
-    relaxation time is u_s/(g cosθ μ'(I_θ) I_θ) ≈ 2 s) and runs 1 s, many viscous times h²/ν of the
-    layer, into the solver's own steady state; the error is the relative L2 error of the particle
-    velocities averaged over the last 0.25 s. The test is severe: μ(I) is flat (d ln μ/d ln I ≈ 0.1
-    at I_θ), so a 1 % error in the shear stress or the pressure moves the shear rate by ~10 %.
-    Target L2 ≤ 3 % (issue 3). Measured (session 3, "stress" pair viscosity): 3.7 % at dx = 1 mm,
-    3.3 % at 0.5 mm; u/u_Bagnold rises from 0.97 (second layer) to 1.07 (surface)."""
-    dx = 0.001 if quick else 0.0005
+    The layer starts from the analytic profile and runs 5 s; the error is the relative L2 error of
+    the particle velocities averaged over t = 4.5..5 s. The solver's own steady state takes seconds to
+    settle (relaxation time u_s/(g cosθ μ'(I_θ) I_θ) ≈ 2 s): at t = 1 s, the window used before
+    session 3, the 0.5 mm error was still 3.3 % on its way to 4.6 %, and the 1 mm one 3.7 % on its
+    way down to 2.5 %. The test is severe: μ(I) is flat (d ln μ/d ln I ≈ 0.1 at I_θ), so a 1 % error in
+    the shear stress or the pressure moves the shear rate by ~10 %.
+    Target L2 ≤ 3 % (issue 3), checked at dx = 1 mm and 0.5 mm (quick: 1 mm only). Measured
+    (session 3, "stress" pair viscosity): 2.5 % at 1 mm, 4.6 % at 0.5 mm. At 0.5 mm the pressure in
+    the whole layer sits ≈ 1.1 Pa (0.4 % at the bed, 1.4 % at 3/4 depth) below ρ g cosθ (h − y), which
+    raises μ(I) = τ/p there and with it the shear rate (+4–12 %); the top particle layer sits ~0.25 dx
+    low. Not resolved; see docs/paper-notes.md."""
+    rows = []
+    for dx in ((0.001,) if quick else (0.001, 0.0005)):
+        rows.append(_bagnold_row(dx, theta_deg))
+    return rows
+
+
+def _bagnold_row(dx: float, theta_deg: float) -> dict:
     h = 0.02
-    t_end, t_avg = 1.0, 0.25
+    t_end, t_avg = 5.0, 0.5
     cfg = load_config(layer_config(theta_deg, h, dx, wall={"slip": "no_slip"}))
     m = cfg.material
     th = math.radians(theta_deg)
@@ -127,9 +137,9 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
         errs.append(float(np.sqrt(np.mean((s.u - ub) ** 2) / np.mean(ub ** 2))))
         means.append(float(np.mean(s.u) / np.mean(ub)))
     err = float(np.mean(errs))
-    return [_row("bagnold", "relative L2 error of u(y)", err, 0.0, err, 0.03,
-                 f"theta={theta_deg} deg, I_theta={i_th:.3f}, h={h} m, dx={dx}, no-slip bed; mean over "
-                 f"t = {t_end - t_avg:.2f}..{t_end} s; mean u / analytic = {means[-1]:.3f}")]
+    return _row("bagnold", f"relative L2 error of u(y), dx = {dx * 1e3:g} mm", err, 0.0, err, 0.03,
+                f"theta={theta_deg} deg, I_theta={i_th:.3f}, h={h} m, dx={dx}, no-slip bed; mean over "
+                f"t = {t_end - t_avg:.2f}..{t_end} s; mean u / analytic = {np.mean(means):.3f}")
 
 
 def collapse_t22a70(quick: bool = False) -> list[dict]:
