@@ -8,8 +8,8 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from granudep.isph.linsolve import (csr_matvec, dic_diagonal, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair,
-                                    split_triangles)
+from granudep.isph.linsolve import (csr_matvec, dic_diagonal, mic_diagonal, pcg_dic, pcg_dic_pair, pcg_jacobi,
+                                    pcg_jacobi_pair, split_triangles)
 from granudep.isph.neighbours import build_neighbours
 
 
@@ -145,6 +145,41 @@ def test_dic_diagonal_matches_the_incomplete_factorisation():
     m = (w @ sp.diags(1.0 / dt) @ w.T).toarray()
     assert np.allclose(np.diag(m), diag, rtol=1e-13, atol=0.0)
     assert np.all(dt > 0) and np.all(dt <= diag)
+    # the sweeps want each lower row by ascending, each upper row by descending column
+    assert all(np.all(np.diff(li[lp[i]:lp[i + 1]].astype(np.int64)) > 0) for i in range(n))
+    assert all(np.all(np.diff(ui[up[i]:up[i + 1]].astype(np.int64)) < 0) for i in range(n))
+
+
+def test_mic_diagonal_matches_the_row_sums():
+    """MIC(0), alpha = 1: the row sums of W D̃⁻¹ Wᵀ are those of A; alpha = 0 is DIC bit for bit."""
+    indptr, indices, data = _particle_matrix(n_side=10, shift=0.05)
+    n = indptr.size - 1
+    lp, li, lv, up, ui, uv, diag = split_triangles(indptr, indices, data)
+    d0, bad0 = mic_diagonal(lp, li, lv, up, uv, diag, 0.0)
+    assert bad0 == -1 and np.array_equal(d0, dic_diagonal(lp, li, lv, diag)[0])
+    d1, bad = mic_diagonal(lp, li, lv, up, uv, diag, 1.0)
+    assert bad == -1 and np.all(d1 > 0) and np.all(d1 < d0 * (1 + 1e-12))
+    a = sp.csr_matrix((data, indices, indptr), shape=(n, n))
+    w = sp.csr_matrix((lv, li, lp), shape=(n, n)) + sp.diags(d1)
+    m = (w @ sp.diags(1.0 / d1) @ w.T).toarray()
+    safe = d1 >= 0.25 * diag  # rows where the safeguard did not take the DIC pivot
+    assert safe.mean() > 0.9
+    rows = np.flatnonzero(safe)
+    assert np.allclose(m.sum(axis=1)[rows], np.asarray(a.sum(axis=1)).ravel()[rows], rtol=0.0,
+                       atol=1e-12 * diag.max())
+
+
+@pytest.mark.parametrize("shift", [0.05, 1e-4])
+def test_mic_converges_to_the_same_solution_in_fewer_iterations(shift):
+    indptr, indices, data = _particle_matrix(shift=shift)
+    n = indptr.size - 1
+    b = np.random.default_rng(3).standard_normal(n)
+    a = sp.csr_matrix((data, indices, indptr), shape=(n, n))
+    x0, it0, info0 = pcg_dic(indptr, indices, data, b, np.zeros(n), 1e-8, 0.0, 1000)
+    x1, it1, info1 = pcg_dic(indptr, indices, data, b, np.zeros(n), 1e-8, 0.0, 1000, 0.97)
+    assert info0 == info1 == 0 and it1 < it0
+    for x in (x0, x1):
+        assert np.linalg.norm(b - a @ x) < 1e-8 * np.linalg.norm(b)
 
 
 @pytest.mark.parametrize("shift, warm", [(0.05, False), (0.05, True), (1e-4, True)])
@@ -216,6 +251,11 @@ def test_dic_pair_equals_two_single_dic_solves_bitwise():
     assert (infou, infov, infou1, infov1) == (0, 0, 0, 0)
     assert (itu, itv) == (itu1, itv1) and itu != itv and itu > 3
     assert np.array_equal(xu, xu1) and np.array_equal(xv, xv1)
+    xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000,
+                                                  0.97)
+    xu2, itu2, _ = pcg_dic(indptr, indices, data, bu, bu, 1e-8, 0.0, 1000, 0.97)
+    xv2, itv2, _ = pcg_dic(indptr, indices, data_v, bv, bv, 1e-8, 0.0, 1000, 0.97)
+    assert (itu, itv) == (itu2, itv2) and np.array_equal(xu, xu2) and np.array_equal(xv, xv2)
     # zero right-hand side on one side; maxiter on the other; breakdown (negative diagonal) on v
     xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, np.zeros(n), bu, bv, bv,
                                                   1e-8, 0.0, 2)

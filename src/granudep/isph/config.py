@@ -123,6 +123,10 @@ class Numerics:
                                 doc="implicit viscous step: SuperLU, Jacobi-preconditioned CG (u and v in lock-step) "
                                     "or DIC-preconditioned CG, warm-started from the right-hand side")
     solver_rtol: float = param(1.0e-8, gt=0.0, lt=1.0, unit="1", doc="CG relative residual tolerance")
+    ic_modification: float = param(0.97, ge=0.0, le=1.0, unit="1",
+                                   doc="cg_dic: relaxation of the modified incomplete Cholesky preconditioner "
+                                       "(0 = plain DIC; 0.97: T22-A150 PPE 62 -> 30 iterations); the solution and "
+                                       "the stopping test do not depend on it")
     max_steps: int = param(2_000_000, gt=0, doc="hard cap on the number of time steps")
 
 

@@ -242,7 +242,14 @@ def pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol,
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
 def split_triangles(indptr, indices, data):
-    """Strict lower and upper parts of a CSR matrix (own CSR arrays) and its diagonal."""
+    """Strict lower and upper parts of a CSR matrix (own CSR arrays) and its diagonal.
+
+    For the sweeps: the indices are unsigned (uint64 row pointers, uint32 columns: numba then
+    drops the negative-index wraparound test of every access) and each row is sorted, the lower
+    part by ascending and the upper part by descending column, so that the entry that the
+    triangular sweep computed last (the nearest row) comes last in the row and the running sum
+    waits for it only at its end. Both together: the Eisenstat product of the T22-A150 PPE
+    57 -> 35 us."""
     n = indptr.size - 1
     lp = np.zeros(n + 1, np.int64)
     up = np.zeros(n + 1, np.int64)
@@ -252,32 +259,56 @@ def split_triangles(indptr, indices, data):
         cu = 0
         for k in range(indptr[i], indptr[i + 1]):
             j = indices[k]
-            if j < i:
-                cl += 1
-            elif j > i:
-                cu += 1
+            cl += j < i
+            cu += j > i
         lp[i + 1] = lp[i] + cl
         up[i + 1] = up[i] + cu
-    li = np.empty(lp[n], np.int64)
+    li = np.empty(lp[n], np.uint32)
     lv = np.empty(lp[n])
-    ui = np.empty(up[n], np.int64)
+    ui = np.empty(up[n], np.uint32)
     uv = np.empty(up[n])
     for i in range(n):
-        a = lp[i]
-        b = up[i]
+        a0 = lp[i]
+        a = a0
+        b0 = up[i]
+        b = b0
         for k in range(indptr[i], indptr[i + 1]):
             j = indices[k]
-            if j < i:
-                li[a] = j
-                lv[a] = data[k]
+            v = data[k]
+            if j < i:  # insertion sort (the rows come nearly sorted from the neighbour search)
+                m = a
+                while m > a0 and li[m - 1] > j:
+                    li[m] = li[m - 1]
+                    lv[m] = lv[m - 1]
+                    m -= 1
+                li[m] = j
+                lv[m] = v
                 a += 1
             elif j > i:
-                ui[b] = j
-                uv[b] = data[k]
+                m = b
+                while m > b0 and ui[m - 1] < j:
+                    ui[m] = ui[m - 1]
+                    uv[m] = uv[m - 1]
+                    m -= 1
+                ui[m] = j
+                uv[m] = v
                 b += 1
             else:
-                diag[i] += data[k]
-    return lp, li, lv, up, ui, uv, diag
+                diag[i] += v
+    return lp.astype(np.uint64), li, lv, up.astype(np.uint64), ui, uv, diag
+
+
+@njit(cache=True)
+def _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r):
+    """r = b − A x with A = L + diag + U given by :func:`split_triangles`; returns ‖r‖₂."""
+    for i in range(b.size):
+        acc = diag[i] * x[i]
+        for k in range(lp[i], lp[i + 1]):
+            acc += lv[k] * x[li[k]]
+        for k in range(up[i], up[i + 1]):
+            acc += uv[k] * x[ui[k]]
+        r[i] = b[i] - acc
+    return math.sqrt(np.dot(r, r))
 
 
 @njit(cache=True)
@@ -290,6 +321,44 @@ def dic_diagonal(lp, li, lv, diag):
         s = diag[i]
         for k in range(lp[i], lp[i + 1]):
             s -= lv[k] * lv[k] / dt[li[k]]
+        if not s > 0.0:
+            return dt, i
+        dt[i] = s
+    return dt, -1
+
+
+@njit(cache=True)
+def mic_diagonal(lp, li, lv, up, uv, diag, alpha):
+    """Modified incomplete Cholesky (MIC(0)) pivots with relaxation ``alpha``: besides the diagonal
+    of M = W D̃⁻¹ Wᵀ, the fill-in that IC(0) drops is lumped onto it (a fraction alpha of it), so
+    that the row sums of M match those of A for alpha = 1 (Gustafsson 1978):
+    d̃_i = a_ii − Σ_{k<i} (a_ik/d̃_k) [(1 − alpha) a_ki + alpha Σ_{j>k} a_kj].
+    alpha = 0 is :func:`dic_diagonal` (bit for bit: it is called). Safeguard (Bridson 2015): a pivot
+    below a quarter of a_ii takes the plain DIC value of its row instead, which keeps M positive
+    definite and well scaled near (almost) singular rows. Any positive d̃ gives an SPD M, so the
+    CG converges to the same solution whatever alpha; alpha only moves the iteration count
+    (T22-A150 PPE: 62 -> 30 iterations with alpha = 0.97). Returns (d̃, first breakdown row or -1)."""
+    if alpha == 0.0:
+        return dic_diagonal(lp, li, lv, diag)
+    n = diag.size
+    usum = np.empty(n)
+    for k in range(n):
+        acc = 0.0
+        for m in range(up[k], up[k + 1]):
+            acc += uv[m]
+        usum[k] = acc
+    dt = np.empty(n)
+    for i in range(n):
+        s = diag[i]
+        sd = diag[i]
+        for k in range(lp[i], lp[i + 1]):
+            kk = li[k]
+            a = lv[k]
+            f = a / dt[kk]
+            s -= f * ((1.0 - alpha) * a + alpha * usum[kk])
+            sd -= f * a
+        if not s >= 0.25 * diag[i]:
+            s = sd
         if not s > 0.0:
             return dt, i
         dt[i] = s
@@ -337,7 +406,7 @@ def _residual(indptr, indices, data, b, x, r):
 
 
 @njit(cache=True)
-def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter):
+def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
     """Solve A x = b (A symmetric positive definite, CSR, any entry order) by DIC-preconditioned
     CG (Eisenstat form, see above), warm-started from x0. Returns (x, iterations, info), info = -1
     when the incomplete factorisation breaks down (non-positive pivot; x = x0)."""
@@ -347,15 +416,15 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter):
     r = np.empty(n)
     if math.sqrt(np.dot(b, b)) == 0.0:
         return b.copy(), 0, 0
+    lp, li, lv, up, ui, uv, diag = split_triangles(indptr, indices, data)
     if _any_nonzero(x):
-        nr = _residual(indptr, indices, data, b, x, r)
+        nr = _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r)
     else:
         r[:] = b
         nr = math.sqrt(np.dot(r, r))
     if nr < thresh:
         return x, 0, 0
-    lp, li, lv, up, ui, uv, diag = split_triangles(indptr, indices, data)
-    dt, bad = dic_diagonal(lp, li, lv, diag)
+    dt, bad = mic_diagonal(lp, li, lv, up, uv, diag, mic)
     if bad >= 0:
         return x, 0, -1  # breakdown: the caller falls back to a direct solve
     kd = np.empty(n)
@@ -396,7 +465,7 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter):
             _upper_solve(up, ui, uv, dinv, eh, e)
             for i in range(n):
                 xt[i] = x[i] + e[i]
-            nr = _residual(indptr, indices, data, b, xt, r)
+            nr = _split_residual(lp, li, lv, up, ui, uv, diag, b, xt, r)
             if nr < thresh:
                 return xt, it + 1, 0
             scale = nr / max(nrh, 1e-300)
@@ -436,18 +505,7 @@ def _pair_eisenstat_product(lp, li, lv, up, ui, uv, dinv_u, dinv_v, kd_u, kd_v, 
 
 
 @njit(cache=True)
-def _side_residual(indptr, indices, data, diag_v, is_v, b, x, r):
-    """‖b − A x‖ for the u matrix (``data``) or the v matrix (``data`` with diagonal ``diag_v``)."""
-    if is_v:
-        _pair_matvec(indptr, indices, data, diag_v, x, x, r, r, False, True)
-        for i in range(b.size):
-            r[i] = b[i] - r[i]
-        return math.sqrt(np.dot(r, r))
-    return _residual(indptr, indices, data, b, x, r)
-
-
-@njit(cache=True)
-def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
+def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
     """:func:`pcg_dic` on the u and v viscous systems in lock-step (A_v = A_u with diagonal
     ``diag_v``; diagonal first in each row): each side gives the same result as its own
     :func:`pcg_dic` call, bit for bit, with one traversal of the off-diagonal entries per
@@ -464,6 +522,8 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
     thresh = np.zeros(2)
     r = np.empty((2, n))
     out = [bu.copy(), bv.copy()]
+    lp, li, lv, up, ui, uv, diag_u = split_triangles(indptr, indices, data)
+    diags = (diag_u, diag_v)
     for s in range(2):
         b = bs[s]
         thresh[s] = max(atol, rtol * math.sqrt(np.dot(b, b)))
@@ -471,7 +531,7 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
             out[s] = b.copy()
             continue
         if _any_nonzero(xs[s]):
-            nr = _side_residual(indptr, indices, data, diag_v, s == 1, b, xs[s], r[s])
+            nr = _split_residual(lp, li, lv, up, ui, uv, diags[s], b, xs[s], r[s])
         else:
             r[s, :] = b
             nr = math.sqrt(np.dot(r[s], r[s]))
@@ -480,11 +540,9 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
             run[s] = True
     if not (run[0] or run[1]):
         return out[0], 0, 0, out[1], 0, 0
-    lp, li, lv, up, ui, uv, diag_u = split_triangles(indptr, indices, data)
-    dts = (dic_diagonal(lp, li, lv, diag_u), dic_diagonal(lp, li, lv, diag_v))
+    dts = (mic_diagonal(lp, li, lv, up, uv, diag_u, mic), mic_diagonal(lp, li, lv, up, uv, diag_v, mic))
     dinv = np.ones((2, n))
     kd = np.zeros((2, n))
-    diags = (diag_u, diag_v)
     for s in range(2):
         dt, bad = dts[s]
         if run[s] and bad >= 0:
@@ -542,7 +600,7 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
                 _upper_solve(up, ui, uv, dinv[s], eh[s], e)
                 for i in range(n):
                     xt[i] = xs[s][i] + e[i]
-                nr = _side_residual(indptr, indices, data, diag_v, s == 1, bs[s], xt, r[s])
+                nr = _split_residual(lp, li, lv, up, ui, uv, diags[s], bs[s], xt, r[s])
                 if nr < thresh[s]:
                     out[s] = xt.copy()
                     its[s] = it + 1
