@@ -284,9 +284,9 @@ def split_triangles(indptr, indices, data):
                 li[m] = j
                 lv[m] = v
                 a += 1
-            elif j > i:
+            elif j > i:  # ascending here, reversed below
                 m = b
-                while m > b0 and ui[m - 1] < j:
+                while m > b0 and ui[m - 1] > j:
                     ui[m] = ui[m - 1]
                     uv[m] = uv[m - 1]
                     m -= 1
@@ -295,6 +295,12 @@ def split_triangles(indptr, indices, data):
                 b += 1
             else:
                 diag[i] += v
+        b -= 1
+        while b0 < b:
+            ui[b0], ui[b] = ui[b], ui[b0]
+            uv[b0], uv[b] = uv[b], uv[b0]
+            b0 += 1
+            b -= 1
     return lp.astype(np.uint64), li, lv, up.astype(np.uint64), ui, uv, diag
 
 

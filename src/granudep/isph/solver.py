@@ -161,7 +161,8 @@ class IsphSolver:
         start, nbr, rx, ry, rr = build_neighbours(self.x, self.y, nf, self.radius, self.period)
         t1 = _time.perf_counter()
         P = self.parts
-        divr, conc, gcx, gcy, lmat, mdiag = ph.geometry_terms(start, nbr, rx, ry, rr, nf, h, vol)
+        wk, gw = ph.pair_kernel(rr, h)
+        divr, conc, gcx, gcy, lmat, mdiag = ph.geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol)
         self.fs = divr < c.numerics.free_surface_threshold
         contact, col = ph.wall_contact(start, nbr, nf, self.x, self.y, self.planes, self.dx, h,
                                        c.wall.cover_offset * self.dx)
@@ -172,7 +173,7 @@ class IsphSolver:
         # particle layer, ρ g cosθ dx/2 (free-surface and thin-front particles keep friction)
         self.p_rheo = np.maximum(self.p, self.p_floor)
         if rh.model == "mu_i":
-            grad = ph.velocity_gradient(start, nbr, rx, ry, rr, nf, h, vol, self.x, self.y, self.u, self.v,
+            grad = ph.velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.x, self.y, self.u, self.v,
                                         lmat, self.p_rheo, self.eta, P.wnx, P.wny, P.wc, self.slip,
                                         c.wall.slip_length, self.mu_wall, self.dx, self.gx, self.gy, self.rho,
                                         rh.eta_max, self.wall_ns, self.wall_k)
@@ -180,8 +181,9 @@ class IsphSolver:
             self.eta, self.gdot = ph.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
                                                     rh.eta_min, rh.eta_max)
         t2 = _time.perf_counter()
-        indptr, indices, data, diag_v = ph.assemble_viscous(start, nbr, rx, ry, rr, nf, h, vol, self.x, self.y,
-                                                    self.u, self.v, self.p_rheo, self.eta, self.gdot, P.wnx, P.wny, P.wc,
+        indptr, indices, data, diag_v = ph.assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, self.x, self.y,
+                                                    self.u, self.v, self.p_rheo, self.eta, self.gdot, P.wnx, P.wny,
+                                                    P.wc,
                                                     self.slip, c.wall.slip_length, self.mu_wall, self.dx,
                                                     dt, rho, self.eps2, self.mean, self.gx, self.gy,
                                                     rh.eta_max, self.lap_norm, self.wall_ns, self.wall_k)
@@ -216,7 +218,7 @@ class IsphSolver:
             self.visc_dv = vs - bv
             self.visc_dt = dt
         t3 = _time.perf_counter()
-        div = ph.divergence(start, nbr, rx, ry, rr, nf, h, vol, us, vs, lmat)
+        div = ph.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
         unknown = np.full(nf, -1, np.int64)
         interior = ~self.fs
         n_unknown = int(interior.sum())
@@ -225,7 +227,7 @@ class IsphSolver:
         # of a free-surface particle: p_fs = ρ g cosθ dx/2 (bed-normal hydrostatics), or 0
         p_new = np.where(self.fs, self.p_fs, 0.0)
         if n_unknown:
-            pi, pj, pd, rhs = ph.assemble_ppe(start, nbr, rx, ry, rr, nf, h, vol, unknown, n_unknown, p_new, div,
+            pi, pj, pd, rhs = ph.assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_new, div,
                                               us, vs, conc, self.c0, c.numerics.density_relaxation, P.wnx, P.wny,
                                               dt, rho, self.eps2, self.a_full, self.lap_norm)
             p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
@@ -239,11 +241,11 @@ class IsphSolver:
         lmat_p[self.fs] = (1.0, 0.0, 0.0, 1.0)
         lmat_p[fsd, 0] = 1.0 / mxx[fsd]
         lmat_p[fsd, 3] = 1.0 / myy[fsd]
-        gpx, gpy = ph.pressure_gradient(start, nbr, rx, ry, rr, nf, h, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
+        gpx, gpy = ph.pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
                                         dt, rho, detached)
         self.u = us - dt / rho * gpx
         self.v = vs - dt / rho * gpy
-        ncx, ncy = ph.smoothed_gradient(start, nbr, rr, nf, h, vol, gcx, gcy)
+        ncx, ncy = ph.smoothed_gradient(start, nbr, wk, nf, h, vol, gcx, gcy)
         sx, sy = ph.shifting(nf, gcx, gcy, self.u, self.v, self.fs, h, dt, c.numerics.shifting, self.dx, ncx, ncy)
         self.x[:nf] += dt * self.u + sx
         self.y[:nf] += dt * self.v + sy
