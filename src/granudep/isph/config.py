@@ -127,6 +127,11 @@ class Numerics:
                                    doc="cg_dic: relaxation of the modified incomplete Cholesky preconditioner "
                                        "(0 = plain DIC; 0.97: T22-A150 PPE 62 -> 30 iterations); the solution and "
                                        "the stopping test do not depend on it")
+    reorder_interval: int = param(10, ge=0, unit="steps",
+                                  doc="renumber the granular particles in natural order (columns of width dx, "
+                                      "by height) every this many steps: faster solves and neighbour loops; "
+                                      "0 = never (the numbering of the initial lattice, as before); outputs keep "
+                                      "the original particle index")
     max_steps: int = param(2_000_000, gt=0, doc="hard cap on the number of time steps")
 
 

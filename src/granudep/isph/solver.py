@@ -141,6 +141,11 @@ class IsphSolver:
         self.exit_x = np.full(nf, np.nan)
         self.exit_y = np.full(nf, np.nan)
         self.outflow_log: list[tuple] = []      # (particle, t, step, y, speed) per departure
+        # particle renumbering (:meth:`_reorder`) every ``reorder_interval`` steps; ``permuted``:
+        # the arrays are no longer in the original order (``ids`` maps them back)
+        self.reorder_interval = c.numerics.reorder_interval
+        self.x_origin = float(self.x.min()) - 0.5 * self.dx
+        self.permuted = False
         self.visc_du = None                     # previous viscous increment (cg_dic warm start)
         self.visc_dv = None
         self.visc_dt = 0.0
@@ -158,6 +163,8 @@ class IsphSolver:
         c = self.cfg
         nf, h, vol, rho = self.nf, self.h, self.vol, self.rho
         t0 = _time.perf_counter()
+        if self.reorder_interval and self.step_no % self.reorder_interval == 0:
+            self._reorder()
         start, nbr, rx, ry, rr = build_neighbours(self.x, self.y, nf, self.radius, self.period)
         t1 = _time.perf_counter()
         P = self.parts
@@ -265,6 +272,28 @@ class IsphSolver:
         st.t_ppe += t4 - t3
         self._check()
 
+    def _reorder(self) -> None:
+        """Renumber the granular particles in natural order: columns of width dx (down-slope), by
+        height within a column, as the initial lattice is numbered. The flow mixes the numbering,
+        which slows the (M)IC preconditioner, the triangular sweeps and the neighbour loops
+        (T22-A70 at 4 mm, mid-run: 4.47 -> 3.68 ms per step with a renumbering every 10 steps);
+        numbering by the 2h cells of the neighbour search instead doubled the PPE iterations.
+        Every per-particle array is permuted; ``ids`` keeps the original index of each particle
+        (outputs are written in that order, see :meth:`full`)."""
+        nf = self.nf
+        col = np.floor((self.x[:nf] - self.x_origin) / self.dx)
+        perm = np.lexsort((self.y[:nf], col))
+        if np.array_equal(perm, np.arange(nf)):
+            return
+        self.x[:nf] = self.x[:nf][perm]
+        self.y[:nf] = self.y[:nf][perm]
+        for name in ("u", "v", "p", "eta", "gdot", "fs", "p_rheo", "visc_du", "visc_dv", "ids"):
+            a = getattr(self, name, None)
+            if a is not None and np.ndim(a) == 1 and a.size == nf:
+                setattr(self, name, a[perm])
+        self._last_us = None
+        self.permuted = True
+
     def _solve_ppe(self, indptr, indices, data, rhs, guess):
         if self.cfg.numerics.pressure_solver == "direct":
             return _solve_direct(indptr, indices, data, [rhs])[0]
@@ -369,7 +398,7 @@ class IsphSolver:
     def full(self, a: np.ndarray, fill: float = 0.0) -> np.ndarray:
         """A per-particle array of the active particles spread over all n0 original particles
         (``fill`` for those gone through the outflow)."""
-        if self.nf == self.n0:
+        if self.nf == self.n0 and not self.permuted:
             return a
         out = np.full(self.n0, fill, dtype=a.dtype)
         out[self.ids] = a
@@ -470,7 +499,7 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
         snaps.time.append(s.t)
         f = snaps.fields
         xs, ys = s.x[:nf], s.y[:nf]
-        if nf < s.n0:
+        if nf < s.n0 or s.permuted:
             xs = s.exit_x.copy()
             xs[s.ids] = s.x[:nf]
             ys = s.exit_y.copy()
