@@ -339,6 +339,38 @@ def wall_contact(start, nbr, nf, x, y, planes, dx, h, cover):
 
 
 @njit(cache=True)
+def detached_from_walls(contact, limit):
+    """Particles whose nearest wall contact (:func:`wall_contact`) is finite but farther than
+    ``limit`` (numpy's min over the short axis of ``contact`` cost 0.12 ms per call)."""
+    n, npl = contact.shape
+    out = np.zeros(n, np.bool_)
+    for i in range(n):
+        m = np.inf
+        for q in range(npl):
+            m = min(m, contact[i, q])
+        out[i] = m > limit and np.isfinite(m)
+    return out
+
+
+@njit(cache=True)
+def lmat_pressure(lmat, fs, mxx, myy):
+    """Renormalisation of the pressure gradient: ``lmat``, except on free-surface particles,
+    where only the diagonal is renormalised (1/M_xx, 1/M_yy where both > 0.4, else none)."""
+    out = lmat.copy()
+    for i in range(fs.size):
+        if fs[i]:
+            out[i, 1] = 0.0
+            out[i, 2] = 0.0
+            if mxx[i] > 0.4 and myy[i] > 0.4:
+                out[i, 0] = 1.0 / mxx[i]
+                out[i, 3] = 1.0 / myy[i]
+            else:
+                out[i, 0] = 1.0
+                out[i, 3] = 1.0
+    return out
+
+
+@njit(cache=True)
 def contact_length(start, nbr, nf, x, y, contact, planes, dx):
     """Wall length carried by each contact particle (Voronoi cell along the wall): half the distance
     to the nearest contact particle of the same wall on either side (dx/2 on a side without one

@@ -173,8 +173,7 @@ class IsphSolver:
         self.fs = divr < c.numerics.free_surface_threshold
         contact, col = ph.wall_contact(start, nbr, nf, self.x, self.y, self.planes, self.dx, h,
                                        c.wall.cover_offset * self.dx)
-        detached = np.min(contact, axis=1) > 0.75 * self.dx
-        detached &= np.isfinite(np.min(contact, axis=1))
+        detached = ph.detached_from_walls(contact, 0.75 * self.dx)
         rh = c.rheology
         # pressure seen by the friction law (eq 5): clipped below at the overburden of half a
         # particle layer, ρ g cosθ dx/2 (free-surface and thin-front particles keep friction)
@@ -242,12 +241,7 @@ class IsphSolver:
         self.p = p_new
         # free-surface particles: diagonal renormalisation only (1/M_xx, 1/M_yy); with one-sided
         # support the full inverse mixes the wall-normal pressure gradient into the tangential one
-        lmat_p = lmat.copy()
-        mxx, myy = mdiag
-        fsd = self.fs & (mxx > 0.4) & (myy > 0.4)
-        lmat_p[self.fs] = (1.0, 0.0, 0.0, 1.0)
-        lmat_p[fsd, 0] = 1.0 / mxx[fsd]
-        lmat_p[fsd, 3] = 1.0 / myy[fsd]
+        lmat_p = ph.lmat_pressure(lmat, self.fs, *mdiag)
         gpx, gpy = ph.pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
                                         dt, rho, detached)
         self.u = us - dt / rho * gpx
