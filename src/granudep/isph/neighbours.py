@@ -67,6 +67,12 @@ def build_neighbours(x, y, nf, radius, period):
     cell = cell_x
     ncy = int((y.max() - ymin) / cell) + 1
     cid, counts, order = _cells(x, y, cell, period, xmin, ymin, ncx, ncy)
+    # positions in cell order: the candidates of a column of three cells are then one contiguous run
+    xs = np.empty(n)
+    ys = np.empty(n)
+    for s in range(n):
+        xs[s] = x[order[s]]
+        ys[s] = y[order[s]]
     r2max = radius * radius
     half = 0.5 * period
     # one distance search: the accepted neighbours of particle i go to its row of ``buf``, whose width
@@ -81,7 +87,10 @@ def build_neighbours(x, y, nf, radius, period):
     for i in range(nf):
         ci = cid[i] // ncy
         cj = cid[i] % ncy
+        xi = x[i]
+        yi = y[i]
         cnt = 0
+        base = i * width
         for dxc in range(-1, 2):
             cx = ci + dxc
             if period > 0.0:
@@ -90,19 +99,16 @@ def build_neighbours(x, y, nf, radius, period):
                 cx = cx % ncx
             elif cx < 0 or cx >= ncx:
                 continue
-            for dyc in range(-1, 2):
-                cy = cj + dyc
-                if cy < 0 or cy >= ncy:
-                    continue
-                c = cx * ncy + cy
-                for s in range(counts[c], counts[c + 1]):
+            # cells (cx, cj - 1 .. cj + 1), in cell order (same visiting order as cell by cell)
+            c0 = cx * ncy + max(cj - 1, 0)
+            c1 = cx * ncy + min(cj + 1, ncy - 1)
+            for s in range(counts[c0], counts[c1 + 1]):
+                ddx = _minimum_image(xi - xs[s], period, half)
+                ddy = yi - ys[s]
+                if ddx * ddx + ddy * ddy < r2max:
                     j = order[s]
-                    if j == i:
-                        continue
-                    ddx = _minimum_image(x[i] - x[j], period, half)
-                    ddy = y[i] - y[j]
-                    if ddx * ddx + ddy * ddy < r2max:
-                        buf[i * width + cnt] = j
+                    if j != i:
+                        buf[base + cnt] = j
                         cnt += 1
         start[i + 1] = start[i] + cnt
     m = start[nf]
