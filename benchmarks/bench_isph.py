@@ -20,6 +20,17 @@ Neighbour list 1.43 -> 0.76 ms. T22-A70 dx = 4 mm to rest (fewer particles: scip
 per-iteration Python overhead weighs more): before 23.9 s (repeats 27.5, 31.1; 2499 steps), cg 14.2 s
 (repeats 14.3, 14.9; same 2499 steps, same front and rest time), cg_dic 12.0 s (2448 steps; a
 different trajectory, see docs/paper-notes.md "Linear solvers").
+
+Performance pass (session 3), measured the same way (interleaved with the previous code, minimum of
+3, --steps 400, load average 0.8-0.9): cg_dic 11.80 [1.07, 1.70, 3.52, 5.38] -> 6.78 ms/step
+[1.00, 0.97, 2.28, 2.41]; CG iterations/step PPE 62 -> 31, viscous (u+v) 46 -> 26. From: modified
+incomplete Cholesky (ic_modification 0.97: PPE 62 -> 30 iterations), triangles with unsigned,
+row-sorted indices (Eisenstat product 57 -> 34 us), viscous warm start from the previous increment,
+W and dW/dr evaluated once per pair and step (kernels ~1.5 -> ~1.0 ms), two numpy reductions moved to
+numba (0.28 ms), cell-ordered candidates in the neighbour search, and a renumbering of the particles
+in natural order every 10 steps (matters once the flow has mixed them: T22-A70). T22-A70 dx = 4 mm
+to rest: 7.8 s (1644 steps, 4.70 ms/step) -> 5.9 s (1698 steps, 3.47 ms/step); rest time and front
+13.62 t_c, 1.440 m -> 13.62 t_c, 1.504 m (area ratio 0.901 -> 0.902): within the round-off spread above.
 """
 from __future__ import annotations
 
