@@ -218,12 +218,16 @@ def section_figures(figures, out_dir: Path | None) -> str:
     return "\n".join(out)
 
 
-def _study_rows_isph(folder: Path) -> pd.DataFrame:
+def _study_rows_isph(folder: Path, dx=None) -> pd.DataFrame:
+    """One row per 2D run in ``folder``; with ``dx`` (m) only the runs at those resolutions (the
+    configured list: a run left over from an earlier list is not a convergence result)."""
     import xarray as xr
     from .compare import reference_row
     rows = []
     for f in sorted(folder.glob("*.nc")):
         with xr.open_dataset(f) as ds:
+            if not _selected(float(ds.attrs.get("dx", math.nan)), dx):
+                continue
             status = str(ds.attrs.get("status", ""))
             row = {"run": f.stem, "dx_mm": 1e3 * float(ds.attrs.get("dx", math.nan)), "status": status,
                    "time_to_rest": float(ds["time_to_rest"].values) if "time_to_rest" in ds else math.nan,
@@ -236,6 +240,13 @@ def _study_rows_isph(folder: Path) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _selected(value: float, wanted) -> bool:
+    """True without a selection, else when ``value`` is one of ``wanted`` (to 1e-9 relative)."""
+    if wanted is None:
+        return True
+    return any(math.isclose(value, float(w), rel_tol=1e-9) for w in wanted)
+
+
 def _drift(values: pd.Series) -> str:
     """Change between the two finest resolutions (last two rows), relative to the finest."""
     v = pd.to_numeric(values, errors="coerce").to_numpy(float)
@@ -244,14 +255,15 @@ def _drift(values: pd.Series) -> str:
     return f"{100 * (v[-1] - v[-2]) / abs(v[-1]):+.1f} %"
 
 
-def section_convergence(folder) -> str:
-    """Convergence target (``results/convergence``): 2D runout, flow time, critical times vs dx; DA vs N."""
+def section_convergence(folder, dx=None, n_particles=None) -> str:
+    """Convergence target (``results/convergence``): 2D runout, flow time, critical times vs dx; DA vs N.
+    ``dx`` (m) and ``n_particles`` restrict the tables to the configured runs (default: every file)."""
     import xarray as xr
     out = ["## Convergence (beyond the paper)\n"]
     root = Path(folder) if folder is not None else None
     if root is None or not (root / "isph").is_dir():
         return "\n".join(out) + _missing("convergence runs (`snakemake -j2 convergence`)", root)
-    iso = _study_rows_isph(root / "isph")
+    iso = _study_rows_isph(root / "isph", dx)
     if not iso.empty:
         iso = iso.sort_values("dx_mm", ascending=False)
         out.append(f"2D ISPH runs in `{root / 'isph'}` (finer to the bottom). Flow time: the front moves < 1 mm "
@@ -268,7 +280,7 @@ def section_convergence(folder) -> str:
     files = sorted((root / "regression").glob("*/critical.csv")) if (root / "regression").is_dir() else []
     for f in files:
         df = pd.read_csv(f)
-        if {"x_norm", "t_s_critical", "dx"} <= set(df.columns):
+        if {"x_norm", "t_s_critical", "dx"} <= set(df.columns) and len(df) and _selected(float(df["dx"].iloc[0]), dx):
             for xn in (0.2, 0.4, 0.6, 0.8):
                 sel = df[np.isclose(df["x_norm"], xn, atol=1e-6)]
                 if len(sel):
@@ -286,6 +298,8 @@ def section_convergence(folder) -> str:
     rows = []
     for f in sorted((root / "da").glob("*.nc")) if (root / "da").is_dir() else []:
         with xr.open_dataset(f) as ds:
+            if not _selected(float(ds.sizes.get("particle", 0)), n_particles):
+                continue
             rows.append({"case": str(ds.attrs.get("case", f.stem.split("_n")[0])),
                          "variant": "deposition" if int(ds.attrs.get("deposition", 1)) else "no deposition",
                          "n": int(ds.sizes.get("particle", 0)),
@@ -340,7 +354,8 @@ def section_sensitivity(table) -> str:
 
 
 def build_summary(regression=None, compare=None, verification=(), benchmarks=None, figures=None,
-                  output=None, convergence=None, sensitivity=None) -> str:
+                  output=None, convergence=None, sensitivity=None, convergence_dx=None,
+                  convergence_n=None) -> str:
     """The Markdown summary text (see module docstring)."""
     out_dir = Path(output).parent if output is not None else None
     parts = [
@@ -356,7 +371,7 @@ def build_summary(regression=None, compare=None, verification=(), benchmarks=Non
         section_table5(regression),
         section_compare(compare),
         section_verification(list(verification or [])),
-        section_convergence(convergence),
+        section_convergence(convergence, convergence_dx, convergence_n),
         section_sensitivity(sensitivity),
         section_benchmarks(benchmarks),
         section_figures(figures, out_dir),
@@ -393,7 +408,7 @@ def _late_depth(path: Path, t_s_from: float) -> str:
                 f"{np.nanmin(last):.2f} to {np.nanmax(last):.2f} along the slope")
 
 
-def caption_numbers(results) -> dict:
+def caption_numbers(results, convergence_dx=None) -> dict:
     """Short 'our number' sentences for the report captions (workflow/report/*.rst), read from the
     outputs under ``results``; a missing output gives "not computed yet (...)". Written by the
     summary rule to ``results/caption_numbers.json``, which the workflow reads into
@@ -484,7 +499,7 @@ def caption_numbers(results) -> dict:
     conv = root / "convergence" / "isph"
     if conv.is_dir() and any(conv.glob("*.nc")):
         def convergence():
-            iso = _study_rows_isph(conv).sort_values("dx_mm", ascending=False)
+            iso = _study_rows_isph(conv, convergence_dx).sort_values("dx_mm", ascending=False)
             return "2D ΔL∞/L0 = " + ", ".join(f"{_fmt(r.get('final_runout_norm'), '.2f')} (dx = {r['dx_mm']:.0f} mm)"
                                               for _, r in iso.iterrows())
         guard("convergence", convergence, "convergence/isph")

@@ -98,6 +98,19 @@ def test_summary_study_sections_read_the_runs(tmp_path):
     assert "+2.9 |" in text                                          # (1.75 - 1.70)/1.75
     assert "| phi_basal_deg | 23.5 | no | -0.0200 | -100 | 0.0300 | +50 | 15.000 | +25.0 | 3.000 | +20.0 |" in text
     assert "Not available" not in text.split("## Convergence", 1)[1].split("## Benchmarks", 1)[0]
+    # the configured lists only: the 6 mm run and the N = 250 run are left out (files of an earlier list)
+    sel = build_summary(convergence=conv, convergence_dx=[0.008, 0.004], convergence_n=[500, 1000])
+    sec = sel.split("## Convergence", 1)[1].split("## Sensitivity", 1)[0]
+    assert "T22-A70_dx0.006" not in sec and "| 6.0 |" not in sec
+    assert "| T22-A70_dx0.004 | 4.0 | 1.900 |" in sec
+    assert "runout +21.1 %" in sec                                   # (1.9 - 1.5)/1.9: 8 -> 4 mm now
+    assert "| 1D-A70 | deposition | 1.700 | 1.750 |" in sec and "N=250" not in sec
+    from granudep.report import caption_numbers
+    (tmp_path / "results").mkdir()
+    (tmp_path / "results" / "convergence").symlink_to(conv, target_is_directory=True)
+    nums = caption_numbers(tmp_path / "results", convergence_dx=[0.008, 0.004])
+    assert "dx = 6 mm" not in nums["convergence"] and "dx = 4 mm" in nums["convergence"]
+    assert "dx = 6 mm" in caption_numbers(tmp_path / "results")["convergence"]
 
 
 def test_caption_numbers_from_outputs_and_rendered_in_captions(inputs, tmp_path):

@@ -21,6 +21,9 @@ rule summary:
         regression=f"{RESULTS}/regression",
         benchmarks=BENCH,
         convergence=f"{RESULTS}/convergence",
+        # the configured runs only: files left from an earlier dx / N list are not results
+        convergence_dx=" ".join(str(d) for d in config["convergence"]["dx"]),
+        convergence_n=" ".join(str(n) for n in config["convergence"]["da_n_particles"]),
         sensitivity=f"{RESULTS}/sensitivity/sensitivity.csv",
         results=RESULTS,
     log:
@@ -34,7 +37,8 @@ rule summary:
     shell:
         "granudep summary -o {output.md} --regression {params.regression} --compare {input.compare}"
         " --verification {input.verification} --benchmarks {params.benchmarks}"
-        " --convergence {params.convergence} --sensitivity {params.sensitivity}"
+        " --convergence {params.convergence} --convergence-dx {params.convergence_dx}"
+        " --convergence-n {params.convergence_n} --sensitivity {params.sensitivity}"
         " --caption-numbers {output.captions} --results {params.results} > {log} 2>&1"
 
 

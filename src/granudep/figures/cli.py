@@ -44,13 +44,14 @@ def _cmd_summary(args) -> int:
     from ..io import write_text
     text = build_summary(regression=args.regression, compare=args.compare, verification=args.verification or [],
                          benchmarks=args.benchmarks, figures=args.figures, output=args.output,
-                         convergence=args.convergence, sensitivity=args.sensitivity)
+                         convergence=args.convergence, sensitivity=args.sensitivity,
+                         convergence_dx=args.convergence_dx, convergence_n=args.convergence_n)
     write_text(text, args.output)
     LOG.info("summary written to %s", args.output)
     if args.caption_numbers:
         import json
         from ..report import caption_numbers
-        write_text(json.dumps(caption_numbers(args.results), indent=1, ensure_ascii=False) + "\n",
+        write_text(json.dumps(caption_numbers(args.results, args.convergence_dx), indent=1, ensure_ascii=False) + "\n",
                    args.caption_numbers)
         LOG.info("report caption numbers written to %s", args.caption_numbers)
     return 0
@@ -98,6 +99,10 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, metavar="summary.md")
     p.add_argument("--regression", metavar="DIR", help="granudep regress output folder")
     p.add_argument("--convergence", metavar="DIR", help="convergence study folder (isph/, regression/, da/)")
+    p.add_argument("--convergence-dx", nargs="+", type=_positive_float, metavar="DX",
+                   help="only the 2D convergence runs at these dx (m; default: every file in the folder)")
+    p.add_argument("--convergence-n", nargs="+", type=int, metavar="N",
+                   help="only the DA convergence runs with these particle counts (default: every file)")
     p.add_argument("--caption-numbers", metavar="JSON",
                    help="also write our numbers for the report captions (read from --results) to this file")
     p.add_argument("--results", metavar="DIR", default="results", help="results folder for --caption-numbers")
