@@ -247,7 +247,10 @@ class IsphSolver:
         self.u = us - dt / rho * gpx
         self.v = vs - dt / rho * gpy
         ncx, ncy = ph.smoothed_gradient(start, nbr, wk, nf, h, vol, gcx, gcy)
-        sx, sy = ph.shifting(nf, gcx, gcy, self.u, self.v, self.fs, h, dt, c.numerics.shifting, self.dx, ncx, ncy)
+        alpha = (ph.surface_band(start, nbr, wk, nf, self.fs, h, 2.0 * self.dx) if c.numerics.shifting_surface == "band"
+                 else self.fs.astype(np.float64))
+        sx, sy = ph.shifting(nf, gcx, gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
+                             ncx, ncy)
         self.x[:nf] += dt * self.u + sx
         self.y[:nf] += dt * self.v + sy
         if self.period > 0:

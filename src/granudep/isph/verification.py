@@ -106,10 +106,12 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     way down to 2.5 %. The test is severe: μ(I) is flat (d ln μ/d ln I ≈ 0.1 at I_θ), so a 1 % error in
     the shear stress or the pressure moves the shear rate by ~10 %.
     Target L2 ≤ 3 % (issue 3), checked at dx = 1 mm and 0.5 mm (quick: 1 mm only). Measured
-    (session 3, "stress" pair viscosity): 2.5 % at 1 mm, 4.6 % at 0.5 mm. At 0.5 mm the pressure in
-    the whole layer sits ≈ 1.1 Pa (0.4 % at the bed, 1.4 % at 3/4 depth) below ρ g cosθ (h − y), which
-    raises μ(I) = τ/p there and with it the shear rate (+4–12 %); the top particle layer sits ~0.25 dx
-    low. Not resolved; see docs/paper-notes.md."""
+    (session 4, shifting band `numerics.shifting_surface: band`): 2.6 % at 1 mm, 1.4 % at 0.5 mm
+    (first order). Before (session 3, shift normal part removed on the free-surface particles
+    only): 2.5 % / 4.6 %, the error growing with refinement: the truncated support one layer under
+    the surface pushed that layer up into the surface layer at every step, the top layer sat 0.25 dx
+    low and the pressure of the whole layer ≈ 1.1 Pa (0.15 dx of overburden) low, which raised
+    μ(I) = τ/p and the shear rate (+4–12 %). See docs/paper-notes.md."""
     rows = []
     for dx in ((0.001,) if quick else (0.001, 0.0005)):
         rows.append(_bagnold_row(dx, theta_deg))
