@@ -113,7 +113,7 @@ class Numerics:
     shifting_surface: str = param("band", choices=("surface", "band"),
                                   doc="where the shift loses its part normal to the free surface: on the "
                                       "free-surface particles only (surface), or also, weighted by "
-                                      "sum W_ij / W(dx) over free-surface neighbours j, just below them (band)")
+                                      "min(1, sum W_ij / W(2 dx)) over free-surface neighbours j, just below them (band)")
     density_relaxation: float = param(0.02, ge=0.0, le=1.0, unit="1",
                                       doc="weight of the density-invariant source (1 - C_i/C0)/dt^2 in the PPE")
     free_surface_pressure: str = param("half_layer", choices=("half_layer", "zero"),

@@ -115,8 +115,9 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     Also reported (no tolerance): the same layer at the collapse resolutions dx = 4 and 2 mm, 5 and 10
     particles over the depth. Measured (session 4): L2 30 % and 8 % (mean u / analytic 0.70 and 0.92;
     sampling every step instead of every 0.05 s gave 22 % and 13 %: at 5–10 particles the layer is
-    not steady), the shear rate low across the depth with the pressure right: thin μ(I) flows are
-    too stiff at coarse dx, which is why the T22-A70 runout grows under refinement
+    not steady), the shear rate 15–30 % low across the depth at 4 mm, with the pressure 1–8 % above
+    hydrostatic (through the flat μ(I) that accounts for much of it): thin μ(I) flows are too stiff at
+    coarse dx, which is why the T22-A70 runout grows under refinement
     (docs/paper-notes.md, "Runout vs resolution")."""
     rows = []
     for dx in ((0.001,) if quick else (0.001, 0.0005)):
