@@ -137,6 +137,9 @@ class Numerics:
                                       "0 = never (the numbering of the initial lattice, as before); outputs keep "
                                       "the original particle index")
     max_steps: int = param(2_000_000, gt=0, doc="hard cap on the number of time steps")
+    energy_limit: float = param(0.01, gt=0.0, le=10.0, unit="1",
+                                doc="stop the run (as a blow-up) when E_kin + E_pot + dissipated rises above "
+                                    "E_0 by more than this share of E_ref = m g cos(theta) sum y(0)")
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@ import xarray as xr
 
 from ..config import to_yaml
 from ..io import provenance, var
+from ..front import FRONT_MEASURE_DOC
 from .config import IsphConfig
 
 
@@ -26,6 +27,36 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
     final_front = float(front[-1]) if front.size else float("nan")
     m = cfg.material
     dims = ("time", "particle")
+    en = {k: np.asarray(v, float) for k, v in getattr(snaps, "energy", {}).items()}
+    eb = getattr(solver, "energy", None)
+    energy_vars = {}
+    if en and eb is not None and en["potential"].size:
+        kin = np.asarray(snaps.kinetic, float)
+        resid = kin + en["potential"] + en["dissipated"] + en["outflow"] - eb.e0
+        energy_vars = {
+            "potential_energy": var(en["potential"], ("time",), "J m-1",
+                                    "potential energy per unit width, -m sum g.r (slope frame, datum: bed and back wall)"),
+            "dissipated_energy": var(en["dissipated"], ("time",), "J m-1",
+                                     "cumulative work of the discrete viscous stress and wall traction, "
+                                     "m sum u*.(A - I)u* over the steps"),
+            "outflow_energy": var(en["outflow"], ("time",), "J m-1",
+                                  "kinetic + potential energy carried out through the downstream outflow"),
+            "energy_residual": var(resid / eb.e_ref, ("time",), "1",
+                                   "(E_kin + E_pot + dissipated + outflow - E_0) / E_ref: > 0 is energy the scheme "
+                                   "created, < 0 numerical dissipation; E_ref = m g cos(theta) sum y(0)"),
+            "energy_projection": var(en["projection"] / eb.e_ref, ("time",), "1",
+                                     "cumulative KE(u^n+1) - KE(u*) of the pressure projection / E_ref"),
+            "energy_shifting": var(en["shifting"] / eb.e_ref, ("time",), "1",
+                                   "cumulative potential energy moved by particle shifting / E_ref"),
+            "energy_clamps": var(en["clamps"] / eb.e_ref, ("time",), "1",
+                                 "cumulative energy change of the wall clamps / E_ref"),
+        }
+    fr = {k: np.asarray(v, float) for k, v in getattr(snaps, "fronts", {}).items()}
+    front_vars = {}
+    for k, doc in FRONT_MEASURE_DOC.items():
+        if k in fr and fr[k].size:
+            front_vars[k] = var(fr[k], ("time",), "m", f"{doc}; from the back wall")
+            front_vars[f"final_{k}"] = var(float(fr[k][-1]), (), "m", f"{k} at the end of the run")
     ds = xr.Dataset(
         data_vars={
             "x": var(stack("x", np.float32), dims, "m", "down-slope particle position from the back wall"),
@@ -51,6 +82,7 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
             "final_front_position": var(final_front, (), "m", "front position at the end of the run"),
             "time_to_rest": var(float(time_to_rest), (), "s",
                                 "start of the first window of rest_duration with the max (rest_measure) speed of the mass < rest_speed"),
+            **energy_vars, **front_vars,
         },
         coords={
             "time": var(t, ("time",), "s", "time since gate removal"),
@@ -76,6 +108,11 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
         "wall_time_s": float(st.wall_s), "wall_clamps": int(st.clamped),
         "final_area_ratio": float(snaps.area[-1]) if snaps.area else float("nan"),
         "ms_per_step": float(1e3 * st.wall_s / st.steps) if st.steps else float("nan"),
+        "linear_solver_fallbacks": int(getattr(st, "fallbacks", 0)),
+        "energy_e0": float(eb.e0) if eb is not None else float("nan"),
+        "energy_ref": float(eb.e_ref) if eb is not None else float("nan"),
+        "energy_max_excess": float(eb.max_excess) if eb is not None else float("nan"),
+        "energy_max_excess_time": float(eb.max_excess_time) if eb is not None else float("nan"),
         "time_to_rest_norm": float(time_to_rest / cfg.t_c) if math.isfinite(time_to_rest) else float("nan"),
     })
     return provenance(ds, case=cfg.case, config_yaml=to_yaml(cfg))

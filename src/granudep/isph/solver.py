@@ -23,9 +23,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..cases import G
-from ..front import front_from_profile
+from ..front import FRONT_MEASURE_DOC, front_from_profile, front_measures
 from ..progress import LOG, Progress
 from . import physics as ph
+from .energy import EnergyBudget, kinetic_energy, potential_energy, viscous_dissipation
 from .config import IsphConfig
 from .linsolve import pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair
 from .neighbours import build_neighbours
@@ -51,6 +52,12 @@ class Snapshots:
     area: list = field(default_factory=list)
     max_speed: list = field(default_factory=list)
     steps: list = field(default_factory=list)
+    energy: dict = field(default_factory=lambda: {k: [] for k in ENERGY_TERMS})
+    fronts: dict = field(default_factory=lambda: {k: [] for k in FRONT_MEASURE_DOC})
+
+
+#: energy terms stored per snapshot (J m-1), see :mod:`.energy`
+ENERGY_TERMS = ("potential", "dissipated", "projection", "shifting", "clamps", "outflow")
 
 
 @dataclass
@@ -149,6 +156,12 @@ class IsphSolver:
         self.visc_du = None                     # previous viscous increment (cg_dic warm start)
         self.visc_dv = None
         self.visc_dt = 0.0
+        self.m = self.rho * self.vol
+        self.energy = EnergyBudget(
+            e0=potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy),
+            e_ref=max(self.m * G * math.cos(th) * float(np.sum(self.y[:nf])), 1e-300))
+        self.e_mech = self.energy.e0
+        self.nf_at_energy = nf
 
     # ------------------------------------------------------------------------------------------
     def time_step(self) -> float:
@@ -224,6 +237,9 @@ class IsphSolver:
             self.visc_dv = vs - bv
             self.visc_dt = dt
         t3 = _time.perf_counter()
+        eb = self.energy
+        eb.dissipated += viscous_dissipation(self.m, self.u, self.v, us, vs, dt, self.gx, self.gy)
+        ke_star = kinetic_energy(self.m, us, vs)
         div = ph.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
         unknown = np.full(nf, -1, np.int64)
         interior = ~self.fs
@@ -251,12 +267,23 @@ class IsphSolver:
                  else self.fs.astype(np.float64))
         sx, sy = ph.shifting(nf, gcx, gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
                              ncx, ncy)
+        ke_new = kinetic_energy(self.m, self.u, self.v)
+        eb.projection += ke_new - ke_star
+        eb.shifting += -self.m * (self.gx * float(np.sum(sx)) + self.gy * float(np.sum(sy)))
         self.x[:nf] += dt * self.u + sx
         self.y[:nf] += dt * self.v + sy
         if self.period > 0:
             self.x[:nf] %= self.period
-        self.stats.clamped += ph.clamp_to_walls(nf, self.x, self.y, self.u, self.v, self.planes, 0.25 * self.dx,
-                                                self.plane_lo, self.plane_hi)
+        e_before = ke_new + potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy)
+        n_clamped = ph.clamp_to_walls(nf, self.x, self.y, self.u, self.v, self.planes, 0.25 * self.dx,
+                                      self.plane_lo, self.plane_hi)
+        self.stats.clamped += n_clamped
+        e_mech = e_before
+        if n_clamped:
+            e_mech = (kinetic_energy(self.m, self.u, self.v)
+                      + potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy))
+            eb.clamps += e_mech - e_before
+        self.e_mech = e_mech
         self._last_us = (us, vs, dt)
         self.t += dt
         self.step_no += 1
@@ -267,7 +294,33 @@ class IsphSolver:
         st.t_kern += (t2 - t1) + (t5 - t4)
         st.t_visc += t3 - t2
         st.t_ppe += t4 - t3
+        self.nf_at_energy = self.nf
         self._check()
+        self._check_energy()
+
+    def _check_energy(self) -> None:
+        """Energy creation: (E_kin + E_pot + D + outflow − E_0)/E_ref above ``numerics.energy_limit``
+        stops the run as a blow-up (naming the time, the step and the stage that gained most)."""
+        eb = self.energy
+        if self.period > 0:          # periodic layers: x wraps, E_pot is not defined
+            return
+        e_mech = self.e_mech if self.nf == self.nf_at_energy else self.mechanical_energy()
+        excess = eb.residual(e_mech, 0.0) / eb.e_ref
+        if excess > eb.max_excess:
+            eb.max_excess, eb.max_excess_time = excess, self.t
+        if excess > self.cfg.numerics.energy_limit:
+            stages = {"projection": eb.projection, "shifting": eb.shifting, "wall clamps": eb.clamps}
+            worst = max(stages, key=stages.get)
+            raise IsphBlowUp(f"energy rose above E_0 by {100 * excess:.2f} % of E_ref at t={self.t:.5f} s, "
+                             f"step {self.step_no} (limit numerics.energy_limit = "
+                             f"{100 * self.cfg.numerics.energy_limit:g} %; largest gain: {worst} "
+                             f"{stages[worst] / eb.e_ref * 100:+.2f} %)")
+
+    def mechanical_energy(self) -> float:
+        """E_kin + E_pot of the particles in the domain."""
+        nf = self.nf
+        return (kinetic_energy(self.m, self.u, self.v)
+                + potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy))
 
     def _reorder(self) -> None:
         """Renumber the granular particles in natural order: columns of width dx (down-slope), by
@@ -375,6 +428,8 @@ class IsphSolver:
         self.exit_x[orig] = self.x[idx]
         self.exit_y[orig] = self.y[idx]
         speed = np.hypot(self.u[idx], self.v[idx])
+        self.energy.outflow += (kinetic_energy(self.m, self.u[idx], self.v[idx])
+                                + potential_energy(self.m, self.x[idx], self.y[idx], self.gx, self.gy))
         for k, i in enumerate(orig):
             self.outflow_log.append((int(i), self.t, self.step_no, float(self.y[idx[k]]), float(speed[k])))
             if len(self.outflow_log) <= 20:
@@ -509,7 +564,15 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
         f["viscosity"].append(s.full(s.eta).astype(np.float32))
         f["free_surface"].append(s.full(s.fs, True).astype(np.int8))
         snaps.front.append(s.front())
+        edges, depth = surface_profile(s.x[:nf], s.y[:nf], s.dx, cfg.domain_length)
+        for k, val in front_measures(edges, depth, cfg.material.d).items():
+            snaps.fronts[k].append(val)
         snaps.kinetic.append(s.kinetic_energy())
+        eb = s.energy
+        e_pot = potential_energy(s.m, s.x[:nf], s.y[:nf], s.gx, s.gy) if s.period <= 0 else float("nan")
+        for k, val in (("potential", e_pot), ("dissipated", eb.dissipated), ("projection", eb.projection),
+                       ("shifting", eb.shifting), ("clamps", eb.clamps), ("outflow", eb.outflow)):
+            snaps.energy[k].append(val)
         snaps.area.append(area_ratio(s.x[:nf], s.y[:nf], s.dx, cfg.domain_length))
         snaps.max_speed.append(s.max_speed())
         snaps.steps.append(s.step_no)
