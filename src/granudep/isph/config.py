@@ -74,6 +74,17 @@ class Rheology:
     pair_mean: str = param("stress", choices=("harmonic", "geometric", "arithmetic", "stress"),
                            doc="pair viscosity of the implicit viscous Laplacian")
     eta_min: float = param(1.0e-3, ge=0.0, unit="Pa s", doc="viscosity floor (p -> 0 at the free surface)")
+    pressure_floor: str = param("half_layer", choices=("half_layer", "none"),
+                                doc="pressure seen by the friction law clipped below at rho g cos(theta) dx/2 "
+                                    "(half_layer: thin fronts keep their friction) or at 0 (none)")
+    regularisation: str = param("none", choices=("none", "barker_gray_2017"),
+                                doc="mu(I) below the well-posed band: the paper's law (none), or the partial "
+                                    "regularisation of Barker & Gray (2017, eq 6.3), well posed for every I")
+    alpha_reg: float = param(1.9, gt=0.0, le=10.0, unit="1",
+                             doc="alpha of the Barker & Gray (2017) regularisation (their value 1.9)")
+    mu_inf: float = param(0.0, ge=0.0, le=1.0, unit="1",
+                          doc="mu_inf of the extended law (mu_s I0 + mu_2 I + mu_inf I^2)/(I0 + I); 0 = eq 5 exactly "
+                              "(Barker & Gray 2017 use 0.05, which makes the law well posed at high I)")
 
     def validate(self, prefix: str) -> None:
         p = f"{prefix}." if prefix else ""
@@ -118,6 +129,10 @@ class Numerics:
                                       doc="weight of the density-invariant source (1 - C_i/C0)/dt^2 in the PPE")
     free_surface_pressure: str = param("half_layer", choices=("half_layer", "zero"),
                                        doc="Dirichlet value on free-surface particles: rho g cos(theta) dx/2 or 0")
+    ppe_divergence: str = param("renormalised", choices=("renormalised", "adjoint"),
+                                doc="divergence of the PPE source: the renormalised divergence (exact for linear "
+                                    "fields), or the negative adjoint of the corrector's pressure gradient "
+                                    "(energy-consistent projection, isph/projection.py)")
     kernel_completion: bool = param(True, doc="PPE: missing neighbours next to the free surface count as p = 0")
     pressure_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic"),
                                  doc="PPE: SuperLU factorisation, Jacobi-preconditioned CG (warm start; scipy's "

@@ -9,7 +9,8 @@
   discrete viscous operator plus the wall friction, so ΔD is exactly the work the discrete stress and
   the wall traction take out in that step (μ(I), Newtonian, Coulomb or no-slip walls alike);
 - what the scheme adds or removes beyond that is kept per stage, so a gain can be traced:
-  the projection (KE(uⁿ⁺¹) − KE(u*)), the shifting (the potential energy of the shift δr, which
+  the projection (the work of the pressure impulse on the mid-step velocity, zero in the continuum),
+  the shifting (the potential energy of the shift δr, which
   moves particles without changing their velocity), the wall clamps, the time integration (the
   rest), and the energy carried out through the outflow.
 
@@ -40,13 +41,22 @@ def viscous_dissipation(m: float, u_n, v_n, us, vs, dt: float, gx: float, gy: fl
     return float(m * (np.dot(us, u_n + dt * gx - us) + np.dot(vs, v_n + dt * gy - vs)))
 
 
+def pressure_work(m: float, u_n, v_n, us, vs, u_new, v_new) -> float:
+    """Work of the projection's pressure impulse on the mid-step velocity ū = (uⁿ + uⁿ⁺¹)/2:
+    W_p = −Δt V Σ ū·∇p = m Σ ū·(uⁿ⁺¹ − u*). The positions advance with uⁿ⁺¹, so this is the
+    pressure's share of E_kin + E_pot; a hydrostatic column at rest gives 0 (ū = 0), and an
+    incompressible flow with p = 0 on its free surface and impermeable walls gives 0 in the
+    continuum (∫ p ∇·u − ∮ p u·n). A positive sum is energy the pressure created."""
+    return float(0.5 * m * (np.dot(u_n + u_new, u_new - us) + np.dot(v_n + v_new, v_new - vs)))
+
+
 @dataclass
 class EnergyBudget:
     """Cumulative energy terms of a run (J m⁻¹)."""
     e0: float = 0.0             # E_kin + E_pot at t = 0
     e_ref: float = 1.0          # scale of the relative measures, m g cosθ Σ y(0)
     dissipated: float = 0.0     # Σ ΔD (physical: viscous stress + wall traction)
-    projection: float = 0.0     # Σ KE(uⁿ⁺¹) − KE(u*) (≤ 0 for an orthogonal projection)
+    projection: float = 0.0     # Σ W_p, the pressure work on the mid-step velocity (0 in the continuum)
     shifting: float = 0.0       # Σ −m g·δr (potential energy moved by particle shifting)
     clamps: float = 0.0         # Σ energy change of the wall clamps
     outflow: float = 0.0        # E_kin + E_pot of the particles that left through the outflow

@@ -45,7 +45,8 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
                                    "(E_kin + E_pot + dissipated + outflow - E_0) / E_ref: > 0 is energy the scheme "
                                    "created, < 0 numerical dissipation; E_ref = m g cos(theta) sum y(0)"),
             "energy_projection": var(en["projection"] / eb.e_ref, ("time",), "1",
-                                     "cumulative KE(u^n+1) - KE(u*) of the pressure projection / E_ref"),
+                                     "cumulative pressure work of the projection on the mid-step velocity, "
+                                     "m sum (u^n + u^n+1)/2.(u^n+1 - u*), / E_ref (0 in the continuum)"),
             "energy_shifting": var(en["shifting"] / eb.e_ref, ("time",), "1",
                                    "cumulative potential energy moved by particle shifting / E_ref"),
             "energy_clamps": var(en["clamps"] / eb.e_ref, ("time",), "1",

@@ -26,8 +26,10 @@ from ..cases import G
 from ..front import FRONT_MEASURE_DOC, front_from_profile, front_measures
 from ..progress import LOG, Progress
 from . import physics as ph
-from .energy import EnergyBudget, kinetic_energy, potential_energy, viscous_dissipation
+from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_work, viscous_dissipation
 from .config import IsphConfig
+from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
+from .projection import adjoint_divergence
 from .linsolve import pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair
 from .neighbours import build_neighbours
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
@@ -112,7 +114,8 @@ class IsphSolver:
         self.p = np.maximum(self.rho * G * math.cos(th) * (c.geometry.H0 - self.y[:nf]), 0.0)
         self.eta = np.full(nf, c.rheology.eta_max if c.rheology.model == "mu_i" else c.rheology.viscosity)
         self.gdot = np.zeros(nf)
-        self.p_floor = 0.5 * self.rho * G * math.cos(th) * self.dx if c.rheology.model == "mu_i" else 0.0
+        self.p_floor = (0.5 * self.rho * G * math.cos(th) * self.dx
+                        if c.rheology.model == "mu_i" and c.rheology.pressure_floor == "half_layer" else 0.0)
         self.p_fs = 0.5 * self.rho * G * math.cos(th) * self.dx if c.numerics.free_surface_pressure == "half_layer" else 0.0
         self.fs = np.zeros(nf, dtype=bool)
         self.c0 = reference_concentration(self.h, self.dx)
@@ -157,6 +160,13 @@ class IsphSolver:
         self.visc_dv = None
         self.visc_dt = 0.0
         self.m = self.rho * self.vol
+        rh, m = c.rheology, c.material
+        if rh.regularisation == "barker_gray_2017":
+            i_n1 = ill_posed_bounds(m.mu_s, m.mu_2, rh.mu_inf, m.I0)[0]
+            self.reg = (i_n1, rh.alpha_reg,
+                        regularisation_constant(i_n1, m.mu_s, m.mu_2, rh.mu_inf, m.I0, rh.alpha_reg))
+        else:
+            self.reg = (0.0, rh.alpha_reg, 1.0)
         self.energy = EnergyBudget(
             e0=potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy),
             e_ref=max(self.m * G * math.cos(th) * float(np.sum(self.y[:nf])), 1e-300))
@@ -197,8 +207,12 @@ class IsphSolver:
                                         c.wall.slip_length, self.mu_wall, self.dx, self.gx, self.gy, self.rho,
                                         rh.eta_max, self.wall_ns, self.wall_k)
             m = c.material
-            self.eta, self.gdot = ph.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
-                                                    rh.eta_min, rh.eta_max)
+            if rh.regularisation == "none" and rh.mu_inf == 0.0:
+                self.eta, self.gdot = ph.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
+                                                        rh.eta_min, rh.eta_max)
+            else:
+                self.eta, self.gdot = regularised_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2,
+                                                            rh.mu_inf, m.I0, *self.reg, rh.eta_min, rh.eta_max)
         t2 = _time.perf_counter()
         indptr, indices, data, diag_v = ph.assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, self.x, self.y,
                                                     self.u, self.v, self.p_rheo, self.eta, self.gdot, P.wnx, P.wny,
@@ -239,8 +253,14 @@ class IsphSolver:
         t3 = _time.perf_counter()
         eb = self.energy
         eb.dissipated += viscous_dissipation(self.m, self.u, self.v, us, vs, dt, self.gx, self.gy)
-        ke_star = kinetic_energy(self.m, us, vs)
-        div = ph.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
+        u_old, v_old = self.u, self.v
+        # free-surface particles: diagonal renormalisation only (1/M_xx, 1/M_yy); with one-sided
+        # support the full inverse mixes the wall-normal pressure gradient into the tangential one
+        lmat_p = ph.lmat_pressure(lmat, self.fs, *mdiag)
+        if c.numerics.ppe_divergence == "adjoint":
+            div = adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, us, vs, lmat_p)
+        else:
+            div = ph.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
         unknown = np.full(nf, -1, np.int64)
         interior = ~self.fs
         n_unknown = int(interior.sum())
@@ -255,9 +275,6 @@ class IsphSolver:
             p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
         t4 = _time.perf_counter()
         self.p = p_new
-        # free-surface particles: diagonal renormalisation only (1/M_xx, 1/M_yy); with one-sided
-        # support the full inverse mixes the wall-normal pressure gradient into the tangential one
-        lmat_p = ph.lmat_pressure(lmat, self.fs, *mdiag)
         gpx, gpy = ph.pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
                                         dt, rho, detached)
         self.u = us - dt / rho * gpx
@@ -268,7 +285,7 @@ class IsphSolver:
         sx, sy = ph.shifting(nf, gcx, gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
                              ncx, ncy)
         ke_new = kinetic_energy(self.m, self.u, self.v)
-        eb.projection += ke_new - ke_star
+        eb.projection += pressure_work(self.m, u_old, v_old, us, vs, self.u, self.v)
         eb.shifting += -self.m * (self.gx * float(np.sum(sx)) + self.gy * float(np.sum(sy)))
         self.x[:nf] += dt * self.u + sx
         self.y[:nf] += dt * self.v + sy
