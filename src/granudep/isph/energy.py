@@ -56,6 +56,7 @@ class EnergyBudget:
     e0: float = 0.0             # E_kin + E_pot at t = 0
     e_ref: float = 1.0          # scale of the relative measures, m g cosθ Σ y(0)
     dissipated: float = 0.0     # Σ ΔD (physical: viscous stress + wall traction)
+    wall_friction: float = 0.0  # the Coulomb wall traction's share of ``dissipated``
     projection: float = 0.0     # Σ W_p, the pressure work on the mid-step velocity (0 in the continuum)
     shifting: float = 0.0       # Σ −m g·δr (potential energy moved by particle shifting)
     clamps: float = 0.0         # Σ energy change of the wall clamps

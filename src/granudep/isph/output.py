@@ -39,6 +39,8 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
             "dissipated_energy": var(en["dissipated"], ("time",), "J m-1",
                                      "cumulative work of the discrete viscous stress and wall traction, "
                                      "m sum u*.(A - I)u* over the steps"),
+            "wall_friction_energy": var(en["wall_friction"], ("time",), "J m-1",
+                                        "the Coulomb wall traction's share of dissipated_energy"),
             "outflow_energy": var(en["outflow"], ("time",), "J m-1",
                                   "kinetic + potential energy carried out through the downstream outflow"),
             "energy_residual": var(resid / eb.e_ref, ("time",), "1",

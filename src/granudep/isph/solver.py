@@ -59,7 +59,7 @@ class Snapshots:
 
 
 #: energy terms stored per snapshot (J m-1), see :mod:`.energy`
-ENERGY_TERMS = ("potential", "dissipated", "projection", "shifting", "clamps", "outflow")
+ENERGY_TERMS = ("potential", "dissipated", "wall_friction", "projection", "shifting", "clamps", "outflow")
 
 
 @dataclass
@@ -220,8 +220,10 @@ class IsphSolver:
                                                     self.slip, c.wall.slip_length, self.mu_wall, self.dx,
                                                     dt, rho, self.eps2, self.mean, self.gx, self.gy,
                                                     rh.eta_max, self.lap_norm, self.wall_ns, self.wall_k)
+        wall_du = wall_dv = None
         if self.slip == ph.SLIP_COULOMB:
             diag_u = data[indptr[:-1]].copy()
+            wall_du, wall_dv = diag_u.copy(), diag_v.copy()
             if c.wall.contact_length == "voronoi":
                 clen = ph.contact_length(start, nbr, nf, self.x, self.y, contact, self.planes, self.dx)
             else:
@@ -229,6 +231,8 @@ class IsphSolver:
             ph.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall, self.gx,
                                  self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v, clen)
             data[indptr[:-1]] = diag_u
+            wall_du = diag_u - wall_du
+            wall_dv = diag_v - wall_dv
         if c.numerics.viscous_solver == "direct":
             data_v = data.copy()
             data_v[indptr[:-1]] = diag_v
@@ -253,6 +257,9 @@ class IsphSolver:
         t3 = _time.perf_counter()
         eb = self.energy
         eb.dissipated += viscous_dissipation(self.m, self.u, self.v, us, vs, dt, self.gx, self.gy)
+        if wall_du is not None:
+            # the Coulomb wall's share: its diagonal increments times u*² (the drag's work)
+            eb.wall_friction += self.m * float(np.dot(wall_du, us * us) + np.dot(wall_dv, vs * vs))
         u_old, v_old = self.u, self.v
         # free-surface particles: diagonal renormalisation only (1/M_xx, 1/M_yy); with one-sided
         # support the full inverse mixes the wall-normal pressure gradient into the tangential one
@@ -587,7 +594,8 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
         snaps.kinetic.append(s.kinetic_energy())
         eb = s.energy
         e_pot = potential_energy(s.m, s.x[:nf], s.y[:nf], s.gx, s.gy) if s.period <= 0 else float("nan")
-        for k, val in (("potential", e_pot), ("dissipated", eb.dissipated), ("projection", eb.projection),
+        for k, val in (("potential", e_pot), ("dissipated", eb.dissipated), ("wall_friction", eb.wall_friction),
+                       ("projection", eb.projection),
                        ("shifting", eb.shifting), ("clamps", eb.clamps), ("outflow", eb.outflow)):
             snaps.energy[k].append(val)
         snaps.area.append(area_ratio(s.x[:nf], s.y[:nf], s.dx, cfg.domain_length))
