@@ -49,3 +49,19 @@ def test_failure_plane_angle_of_a_short_collapse(tmp_path):
     fp = failure_plane_angle(ds, t_norm=1.0)
     # a straight failure surface from the toe into the column: between 25 and 75 deg from the bed
     assert fp["points"] >= 3 and 25.0 < fp["angle_deg"] < 75.0
+
+
+def test_dam_break_coarse_is_stable_and_reports_its_energy():
+    # dx = 8 mm: stable to t = 1 s; the energy row is a measurement (its tolerance 0.5 % is the target)
+    rows = v.dam_break(quick=True)
+    stable = [r for r in rows if r["quantity"].startswith("stable")][0]
+    assert stable["passed"], stable["note"]
+    energy = [r for r in rows if r["quantity"].startswith("max (E_kin")][0]
+    assert energy["value"] < 0.05
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="issue 11, open: the projection's pressure creates energy in the low-"
+                                       "viscosity dam break (+6..20 % of E_ref by 0.4 s at 4 mm; 2 mm blows up)")
+def test_dam_break_energy_target_at_4_and_2_mm():
+    _assert_rows(v.dam_break(quick=False))
