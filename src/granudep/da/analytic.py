@@ -104,17 +104,17 @@ def exact_energy_line(s, theta, kappa, mu: float, s0: float, u0: float = 0.0, ce
     and a block from rest stops where the drop over the horizontal distance is tan α = μ.
     Returns (s, u) from s0 to the stop (u = 0 there; the stop found by linear interpolation)."""
     from scipy.integrate import cumulative_simpson
-    s = np.asarray(s, dtype=float)
-    keep = s >= s0
-    s, theta, kappa = s[keep], np.asarray(theta)[keep], np.asarray(kappa)[keep]
+    s_all = np.asarray(s, dtype=float)
+    keep = s_all > s0
+    s = np.concatenate([[s0], s_all[keep]])
+    theta = np.concatenate([[np.interp(s0, s_all, theta)], np.asarray(theta)[keep]])
+    kappa = np.concatenate([[np.interp(s0, s_all, kappa)], np.asarray(kappa)[keep]])
     K = cumulative_simpson(kappa, x=s, initial=0.0) if centripetal else np.zeros_like(s)
     src = g * (np.sin(theta) - mu * np.cos(theta)) * np.exp(2.0 * mu * K)
     E = np.exp(-2.0 * mu * K) * (0.5 * u0 * u0 + cumulative_simpson(src, x=s, initial=0.0))
-    neg = np.flatnonzero(E <= 0.0)
+    neg = np.flatnonzero(E[1:] <= 0.0) + 1
     if neg.size:
         j = int(neg[0])
-        if j == 0:
-            return s[:1], np.zeros(1)
         s_stop = s[j - 1] + (s[j] - s[j - 1]) * E[j - 1] / (E[j - 1] - E[j])
         s = np.concatenate([s[:j], [s_stop]])
         E = np.concatenate([E[:j], [0.0]])

@@ -40,6 +40,9 @@ def _run(args) -> int:
               f"residual {ds.attrs['x_inf_residual']:.2e}); A = {ds.attrs['A']:.5g}, B = {ds.attrs['B']:.5g} "
               f"({ds.attrs['ab_source']}, {ds.attrs['coefficient_units']})")
     print(summary_line(ds))
+    if "travel_angle" in ds:  # a path run (geometry.path)
+        from .path_run import path_summary_line
+        print(path_summary_line(ds))
     print(f"written {out}")
     sys.stdout.flush()
     return 0
@@ -50,7 +53,8 @@ def register(subparsers) -> None:
         "da", help="run the 1D depth-averaged SPH model (Table 5 case or YAML), with or without deposition",
         description="Run the 1D DA SPH model of Sections 2.3-2.4; prints progress and, at the end, the final "
                     "runout dL/L0 (from the gate) and the flow time with the front definition.")
-    p.add_argument("case", metavar="CASE|CONFIG.yaml", help="1D-A30, 1D-A45, 1D-A70, 1D-A124 or a YAML config")
+    p.add_argument("case", metavar="CASE|CONFIG.yaml", help="1D-A30, 1D-A45, 1D-A70, 1D-A124 or a YAML config "
+                   "(with geometry.path: a run along a slope profile, e.g. config/da/example_path.yaml)")
     p.add_argument("--no-deposition", action="store_true", help="switch the deposition source term off")
     p.add_argument("-o", "--output", metavar="OUT.nc",
                    help="NetCDF output (default results/da/{case}_{deposition|nodeposition}.nc)")

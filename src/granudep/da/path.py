@@ -3,7 +3,7 @@
 Input: a CSV with a header row that names each column **with its unit** — ``x [m], z [m]``
 (horizontal distance, elevation) or ``s [m], z [m]`` (distance along the bed, elevation), and an
 optional ``width [m]`` (channel width b). ``x (m)``, ``x_m`` and ``x/m`` are read too; the only
-unit is m. Bad files are refused with one line naming the file, the row and the problem.
+unit is m. Bad files are refused with one line naming the file, the line and the problem.
 
 Smoothing (``smoothing_length`` σ): the linear spline (polyline) through the points, convolved
 with a Gaussian of standard deviation σ. In closed form, with m_k the segment slopes and
@@ -63,6 +63,9 @@ class PathGeometry:
     ab_slope: Literal["release", "local"] = param(
         "release", doc="A, B of eq 36 (ab_source computed): at the release zone's (a, θ), or at the local slope")
     centripetal: bool = param(True, doc="normal stress g cosθ + κ u² (Savage & Hutter 1991); false: g cosθ")
+    time_step: Literal["relative", "absolute"] = param(
+        "relative", doc="CFL speed: wave speed + relative velocity (relative) or max(|u|, sqrt(g h)) as eq 32 "
+                        "in the constant-theta model (absolute); path_solver.py")
 
     def validate(self, prefix: str) -> None:
         p = f"{prefix}." if prefix else ""
@@ -128,16 +131,19 @@ def _read_profile(path: str, key: str) -> Profile:
     p = Path(path)
     if not p.is_file():
         raise ConfigError(f"{key}: path file {path!r} not found")
-    lines = [ln for ln in p.read_text().splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
+    numbered = [(k, ln) for k, ln in enumerate(p.read_text().splitlines(), start=1)
+                if ln.strip() and not ln.lstrip().startswith("#")]
+    if not numbered:
         raise ConfigError(f"{key}: {p.name}: empty file (needs a header row and at least 3 points)")
-    sep = "," if "," in lines[0] else None
-    cols = _parse_header(lines[0].split(sep), key, p.name)
+    sep = "," if "," in numbered[0][1] else None
+    cols = _parse_header(numbered[0][1].split(sep), key, p.name)
     rows = []
-    for k, ln in enumerate(lines[1:], start=2):
+    lineno = []
+    for k, ln in numbered[1:]:
+        lineno.append(k)
         cells = ln.split(sep)
         if len(cells) != len(cols):
-            raise ConfigError(f"{key}: {p.name} data row {k}: {len(cells)} values, header has {len(cols)}")
+            raise ConfigError(f"{key}: {p.name} line {k}: {len(cells)} values, header has {len(cols)}")
         vals = []
         for col, c in zip(cols, cells):
             try:
@@ -145,7 +151,7 @@ def _read_profile(path: str, key: str) -> Profile:
             except ValueError:
                 v = float("nan")
             if not math.isfinite(v):
-                raise ConfigError(f"{key}: {p.name} data row {k}: {col} = {c.strip()!r} is not a finite number")
+                raise ConfigError(f"{key}: {p.name} line {k}: {col} = {c.strip()!r} is not a finite number")
             vals.append(v)
         rows.append(vals)
     if len(rows) < 3:
@@ -159,7 +165,7 @@ def _read_profile(path: str, key: str) -> Profile:
         bad = np.flatnonzero(dx <= 0.0)
         if bad.size:
             i = int(bad[0])
-            raise ConfigError(f"{key}: {p.name} data row {i + 3}: x must increase strictly along the path "
+            raise ConfigError(f"{key}: {p.name} line {lineno[i + 1]}: x must increase strictly along the path "
                               f"(x = {x[i + 1]:g} m after {x[i]:g} m)")
     else:
         s = col["s"]
@@ -167,12 +173,12 @@ def _read_profile(path: str, key: str) -> Profile:
         bad = np.flatnonzero(dsv <= 0.0)
         if bad.size:
             i = int(bad[0])
-            raise ConfigError(f"{key}: {p.name} data row {i + 3}: s must increase strictly along the path "
+            raise ConfigError(f"{key}: {p.name} line {lineno[i + 1]}: s must increase strictly along the path "
                               f"(s = {s[i + 1]:g} m after {s[i]:g} m)")
         bad = np.flatnonzero(np.abs(dz) >= dsv)
         if bad.size:
             i = int(bad[0])
-            raise ConfigError(f"{key}: {p.name} data row {i + 3}: |dz| = {abs(dz[i]):g} m >= ds = {dsv[i]:g} m "
+            raise ConfigError(f"{key}: {p.name} line {lineno[i + 1]}: |dz| = {abs(dz[i]):g} m >= ds = {dsv[i]:g} m "
                               f"(s is the distance along the bed: a vertical or impossible segment)")
         dx = np.sqrt(dsv * dsv - dz * dz)
         x = s[0] + np.concatenate([[0.0], np.cumsum(dx)])
@@ -180,14 +186,14 @@ def _read_profile(path: str, key: str) -> Profile:
     bad = np.flatnonzero(slope > MAX_SLOPE_DEG)
     if bad.size:
         i = int(bad[0])
-        raise ConfigError(f"{key}: {p.name} data rows {i + 2}-{i + 3}: slope {slope[i]:.3g} deg > "
+        raise ConfigError(f"{key}: {p.name} lines {lineno[i]}-{lineno[i + 1]}: slope {slope[i]:.3g} deg > "
                           f"{MAX_SLOPE_DEG:g} deg (allowed: <= {MAX_SLOPE_DEG:g} deg; a DA model needs a shallow bed)")
     width = col.get("width")
     if width is not None:
         bad = np.flatnonzero(width <= 0.0)
         if bad.size:
             i = int(bad[0])
-            raise ConfigError(f"{key}: {p.name} data row {i + 2}: width must be > 0 m (got {width[i]:g})")
+            raise ConfigError(f"{key}: {p.name} line {lineno[i]}: width must be > 0 m (got {width[i]:g})")
     return Profile(x - x[0], z, width, str(p))
 
 

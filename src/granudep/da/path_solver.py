@@ -23,6 +23,13 @@ width. The deposit is kept as volume per grid cell (conserved) and as volume/b (
 for the bed term). With b ≡ 1, θ constant and κ = 0 every operation reduces to
 ``solver.advance`` bit for bit (tested).
 
+Time step (``geometry.path.time_step``): ``absolute`` is eq 32 as in ``solver.advance``,
+Δt = CFL L_s / max(|u|, √(g h)). ``relative`` (default on a path) drops the advection speed, which
+no Lagrangian scheme needs for stability (particles carry their state; Monaghan's SPH CFL uses
+the wave speed and the relative velocity of neighbours): Δt = CFL L_s / max(√(g h) + L_s |∂u/∂s|),
+plus |u| Δt ≤ CFL · ¼ σ so that a step never jumps over the bed's changes of slope (σ: the path
+smoothing length). Measured effect in docs/paper-notes.md ("DA on a path profile").
+
 Friction is integrated like the other forces (Heun): the predictor's budget is N⁺(stage 1) tanφ_B Δt,
 the corrector's ½ Δt tanφ_B (N⁺₁ + N⁺₂); for a constant N this is the constant-θ budget exactly.
 """
@@ -45,8 +52,10 @@ from .solver import (AT_REST, ESCAPED, F_ND, F_U, F_V, F_V0, F_H, MAX_STEPS, N_F
                      evaluate, grid_depth, parameter_vector, particle_depths, smooth_deposit, smoothing_length)
 
 # the path's own constants (second parameter vector)
-Q_ORIGIN, Q_DS, Q_CENT, Q_TANB, Q_THR = range(5)
-N_Q = 5
+Q_ORIGIN, Q_DS, Q_CENT, Q_TANB, Q_THR, Q_DTREL, Q_LGEO = range(7)
+N_Q = 7
+# time_step 'relative': |u| Δt <= CFL · GEOMETRY_STEP · σ (σ the path's smoothing length)
+GEOMETRY_STEP = 0.25
 # rows of the envelope array: max depth, max speed, arrival time
 E_H, E_U, E_T = 0, 1, 2
 # diagnostics: clipped (N < 0) particle-stages, largest deficit −N/g, station of it
@@ -168,6 +177,8 @@ def advance_path(x, F, order, dep, depb, binv, env, diag, t, t_target, prm, q, t
     ds = q[Q_DS]
     ns = tab.shape[1]
     origin = q[Q_ORIGIN]
+    rel = q[Q_DTREL] > 0.5
+    lgeo = q[Q_LGEO]
     xe = np.empty(2 * n)
     ue = np.empty(2 * n)
     Ve = np.empty(2 * n)
@@ -216,14 +227,22 @@ def advance_path(x, F, order, dep, depb, binv, env, diag, t, t_target, prm, q, t
             deposit_gradient(x, V, depb, dxg, L, qc, wall, gb1)
         _stage(x, u, h1, dh1, du1, n, V, tab, q, g, gs1, gc1, fc1, k1, diag)
         vmax = 0.0
+        wmax = 0.0
         for i in range(n):
             F[F_H, i] = h1[i]
             if V[i] > 0.0:
                 F[F_ND, i] = nd[i]
-                c = max(abs(u[i]), math.sqrt(g * h1[i]))
+                if rel:
+                    c = math.sqrt(g * h1[i]) + L * abs(du1[i])
+                    if abs(u[i]) > wmax:
+                        wmax = abs(u[i])
+                else:
+                    c = max(abs(u[i]), math.sqrt(g * h1[i]))
                 if c > vmax:
                     vmax = c
         dt = prm[P_CFL] * L / vmax
+        if rel and wmax * dt > prm[P_CFL] * lgeo:
+            dt = prm[P_CFL] * lgeo / wmax
         last = t + dt >= t_target
         if last:
             dt = t_target - t
@@ -412,6 +431,8 @@ def path_vectors(cfg, setup: PathSetup, phys, ng: int, centripetal: bool):
     q[Q_CENT] = 1.0 if centripetal else 0.0
     q[Q_TANB] = math.tan(math.radians(mat.phi_basal_deg)) if num.basal_friction else 0.0
     q[Q_THR] = cfg.front_threshold
+    q[Q_DTREL] = 1.0 if cfg.geometry.path.time_step == "relative" else 0.0
+    q[Q_LGEO] = GEOMETRY_STEP * setup.bed.sigma if math.isfinite(setup.bed.sigma) else 1e300
     _ = G
     return prm, q
 
