@@ -47,9 +47,11 @@ def _path_csv(entry):
     if not csv:
         raise WorkflowError(f"config path_cases: {entry['name']}: {cfg_file} has no geometry.path.file "
                             "(a DA config on a path profile, see config/da/example_path.yaml)")
+    if not os.path.isfile(csv) and not os.path.isabs(csv):  # as granudep: else next to the YAML
+        csv = os.path.join(os.path.dirname(cfg_file), csv)
     if not os.path.isfile(csv):
         raise WorkflowError(f"config path_cases: {entry['name']}: path file {csv!r} (geometry.path.file in "
-                            f"{cfg_file}; relative to the repository root) not found")
+                            f"{cfg_file}; relative to the repository root or to the YAML) not found")
     return csv
 
 

@@ -14,7 +14,7 @@ from typing import Any, Literal, Mapping
 
 from ..cases import check_case_name, material, momentum_scale, table5
 from ..config import ConfigError, build, load_yaml, merge, param
-from .path import PathGeometry
+from .path import PathGeometry, anchor_path_file
 
 _GLASS = material("glass_beads")
 
@@ -214,7 +214,7 @@ def resolve(case_or_config: str | Path | Mapping | DAConfig, deposition: bool | 
             base = merge(case_mapping(base["case"]), base)
     elif isinstance(case_or_config, (str, Path)) and (str(case_or_config).endswith((".yaml", ".yml"))
                                                       or Path(case_or_config).is_file()):
-        base = load_yaml(case_or_config)
+        base = anchor_path_file(load_yaml(case_or_config), case_or_config)
         if "case" not in base:
             base["case"] = Path(case_or_config).stem
         if isinstance(base.get("case"), str) and base["case"] in set(table5().case_id):

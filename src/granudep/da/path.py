@@ -50,7 +50,8 @@ _NAMES = ("x", "s", "z", "width")
 @dataclass(frozen=True)
 class PathGeometry:
     """``geometry.path``: the slope profile and the release along it (stations s in m along the bed)."""
-    file: str = param(doc="CSV of x [m], z [m] (or s [m], z [m]), optional width [m]; relative to the working directory")
+    file: str = param(doc="CSV of x [m], z [m] (or s [m], z [m]), optional width [m]; relative to the working "
+                          "directory, else to the YAML's folder")
     smoothing_length: float | None = param(None, gt=0.0, unit="m",
                                            doc="σ of the Gaussian smoothing of the polyline; null: mean point spacing")
     ds: float | None = param(None, gt=0.0, unit="m", doc="spacing of the tabulated bed (θ, κ, b); null: σ/50")
@@ -200,6 +201,18 @@ def _read_profile(path: str, key: str) -> Profile:
 @lru_cache(maxsize=32)
 def _cached(path: str, mtime: float, key: str) -> Profile:
     return _read_profile(path, key)
+
+
+def anchor_path_file(data: dict, yaml_path) -> dict:
+    """A relative ``geometry.path.file`` that does not exist from the working directory but does
+    next to the YAML that names it is taken from there (the YAML and its CSV travel together)."""
+    pth = (data.get("geometry") or {}).get("path") if isinstance(data.get("geometry"), dict) else None
+    if isinstance(pth, dict) and isinstance(pth.get("file"), str):
+        f = Path(pth["file"])
+        beside = Path(yaml_path).parent / f
+        if not f.is_absolute() and not f.is_file() and beside.is_file():
+            pth["file"] = str(beside)
+    return data
 
 
 def read_profile(path: str, key: str = "geometry.path.file") -> Profile:
