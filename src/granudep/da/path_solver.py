@@ -26,7 +26,7 @@ for the bed term). With b ≡ 1, θ constant and κ = 0 every operation reduces 
 Time step (``geometry.path.time_step``): ``absolute`` is eq 32 as in ``solver.advance``,
 Δt = CFL L_s / max(|u|, √(g h)). ``relative`` (default on a path) drops the advection speed, which
 no Lagrangian scheme needs for stability (particles carry their state; Monaghan's SPH CFL uses
-the wave speed and the relative velocity of neighbours): Δt = CFL L_s / max(√(g h) + L_s |∂u/∂s|),
+the wave speed and the relative velocity of neighbours): Δt = CFL L_s / max(√(g h) + min(L_s |∂u/∂s|, 2 max|u|)),
 plus |u| Δt ≤ CFL · ¼ σ so that a step never jumps over the bed's changes of slope (σ: the path
 smoothing length). Measured effect in docs/paper-notes.md ("DA on a path profile").
 
@@ -228,14 +228,21 @@ def advance_path(x, F, order, dep, depb, binv, env, diag, t, t_target, prm, q, t
         _stage(x, u, h1, dh1, du1, n, V, tab, q, g, gs1, gc1, fc1, k1, diag)
         vmax = 0.0
         wmax = 0.0
+        if rel:
+            for i in range(n):
+                if V[i] > 0.0 and abs(u[i]) > wmax:
+                    wmax = abs(u[i])
         for i in range(n):
             F[F_H, i] = h1[i]
             if V[i] > 0.0:
                 F[F_ND, i] = nd[i]
                 if rel:
-                    c = math.sqrt(g * h1[i]) + L * abs(du1[i])
-                    if abs(u[i]) > wmax:
-                        wmax = abs(u[i])
+                    # relative velocity across the support, L |∂u/∂s|, never above 2 max|u| (an
+                    # isolated or nearly emptied particle can have an ill-conditioned ∂u/∂s)
+                    r = L * abs(du1[i])
+                    if not r <= 2.0 * wmax:
+                        r = 2.0 * wmax
+                    c = math.sqrt(g * h1[i]) + r
                 else:
                     c = max(abs(u[i]), math.sqrt(g * h1[i]))
                 if c > vmax:
@@ -243,6 +250,8 @@ def advance_path(x, F, order, dep, depb, binv, env, diag, t, t_target, prm, q, t
         dt = prm[P_CFL] * L / vmax
         if rel and wmax * dt > prm[P_CFL] * lgeo:
             dt = prm[P_CFL] * lgeo / wmax
+        if not dt > 0.0:
+            return t, nsteps, NONFINITE, -1, L, dt
         last = t + dt >= t_target
         if last:
             dt = t_target - t
