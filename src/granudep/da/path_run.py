@@ -20,12 +20,14 @@ from ..config import ConfigError, to_yaml
 from ..front import flow_time
 from ..io import provenance, var
 from ..progress import LOG, Progress
-from .output import FRONT_DEFINITION
 from .path import Bed, bed_of
 from .physics import earth_pressure_coefficients
 from .path_solver import AT_REST, RUNNING, E_H, E_T, E_U, D_DEFICIT, D_LIFT, D_WHERE, PathSetup, bed_table, simulate_path
 from .solver import Physics
 
+FRONT_DEFINITION = ("down-slope edge of the farthest down-slope contiguous run of grid cells whose total depth "
+                    "h + h_D (SPH depth eq 20 on the grid / width, plus deposit) is >= front_depth_threshold and "
+                    "which holds >= 1 % of the material above threshold (granudep.da.path_solver.path_front)")
 ARRIVAL_DEFINITION = "first time a particle at least front_depth_threshold deep passed the cell"
 
 

@@ -446,8 +446,27 @@ def path_vectors(cfg, setup: PathSetup, phys, ng: int, centripetal: bool):
     return prm, q
 
 
-def _record(rec, cfg, setup, x, F, order, dep, t, L, dt, steps, dxg, ng, width_c, thr):
+MAIN_RUN_FRACTION = 0.01
+
+
+def path_front(edges, depth, thr, width, fraction: float = MAIN_RUN_FRACTION) -> float:
+    """Front on a path: ``front.front_from_profile`` started in the farthest down-slope contiguous
+    run of cells with h + h_D ≥ thr that holds at least ``fraction`` of the material above threshold.
+    On a long path the main deposit is often separated from material left in the release zone; the
+    constant-θ rule (walk from the deepest cell) would then stop at the release."""
     from ..front import front_from_profile
+    above = depth >= thr
+    if not above.any():
+        return float("nan")
+    vol = depth * width * np.diff(edges)
+    starts = np.flatnonzero(above & ~np.concatenate([[False], above[:-1]]))
+    ends = np.flatnonzero(above & ~np.concatenate([above[1:], [False]]))
+    runs = np.array([vol[a:b + 1].sum() for a, b in zip(starts, ends)])
+    main = np.flatnonzero(runs >= fraction * runs.sum())
+    return front_from_profile(edges, depth, thr, start=int(starts[main[-1]]))
+
+
+def _record(rec, cfg, setup, x, F, order, dep, t, L, dt, steps, dxg, ng, width_c, thr):
     n = x.shape[0]
     qc = cfg.numerics.kernel_support
     wall = cfg.geometry.back_wall
@@ -461,7 +480,7 @@ def _record(rec, cfg, setup, x, F, order, dep, t, L, dt, steps, dxg, ng, width_c
     rec.flow_depth.append(flow)
     rec.deposit_depth.append(depo)
     rec.deposited_volume.append(float(np.sum(dep)))
-    rec.front.append(front_from_profile(rec.x_edges, flow + depo, thr))
+    rec.front.append(path_front(rec.x_edges, flow + depo, thr, width_c))
     rec.time.append(t)
     rec.smoothing_length.append(L)
     rec.time_step.append(dt)
