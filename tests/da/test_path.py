@@ -193,3 +193,15 @@ def test_cli_on_a_path(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "travel angle atan(H/L)" in out.stdout
     assert open_dataset(tmp_path / "o.nc").attrs["path_file"] == str(csv)
+
+
+def test_path_front_takes_the_farthest_main_run():
+    from granudep.da.path_solver import path_front
+    edges = np.arange(101) * 1.0
+    depth = np.zeros(100)
+    depth[5:15] = 3.0      # left in the release zone (the deepest)
+    depth[40:60] = 1.0     # the main deposit, separated by a gap
+    depth[80] = 0.2        # a detached bit (< 1 %)
+    assert path_front(edges, depth, 0.1, np.ones(100)) == 60.0
+    depth[40:60] = 0.001   # below threshold: the release deposit is the front
+    assert path_front(edges, depth, 0.1, np.ones(100)) == 15.0
