@@ -205,3 +205,24 @@ def test_path_front_takes_the_farthest_main_run():
     assert path_front(edges, depth, 0.1, np.ones(100)) == 60.0
     depth[40:60] = 0.001   # below threshold: the release deposit is the front
     assert path_front(edges, depth, 0.1, np.ones(100)) == 15.0
+
+
+def test_ab_by_release_zone_or_local_slope(tmp_path):
+    from granudep.da.path_run import path_coefficients, path_setup
+    table = tmp_path / "coefficients.csv"
+    table.write_text("theta_deg,a,A,B\n10,0.2,-0.05,0.08\n10,1.0,-0.03,0.05\n22,0.2,-0.04,0.06\n22,1.0,-0.02,0.03\n")
+    csv = pv.curved_lab_path(tmp_path)
+    base = pv._lab_config(csv)
+    dep = {**base["deposition"], "ab_source": "computed", "coefficients": str(table)}
+    cfg = resolve({**base, "deposition": dep})
+    with pytest.raises(ConfigError, match="geometry.path.ab_slope: 'release' reads A, B at the release zone"):
+        path_coefficients(cfg, path_setup(cfg))          # a 30 deg release is outside the 10-22 deg table
+    local = {**base["geometry"], "path": {**base["geometry"]["path"], "ab_slope": "local"}}
+    cfg = resolve({**base, "geometry": local, "deposition": dep})
+    A, B, src = path_coefficients(cfg, path_setup(cfg))
+    a = 0.14 / 0.2
+    steep = np.degrees(path_setup(cfg).bed.theta) >= 22.0
+    flat = np.degrees(path_setup(cfg).bed.theta) <= 10.0
+    np.testing.assert_allclose(A[steep], -0.04 + (a - 0.2) / 0.8 * 0.02)   # clamped to 22 deg
+    np.testing.assert_allclose(A[flat], -0.05 + (a - 0.2) / 0.8 * 0.02)    # clamped to 10 deg
+    assert "clamped" in src
