@@ -226,3 +226,15 @@ def test_ab_by_release_zone_or_local_slope(tmp_path):
     np.testing.assert_allclose(A[steep], -0.04 + (a - 0.2) / 0.8 * 0.02)   # clamped to 22 deg
     np.testing.assert_allclose(A[flat], -0.05 + (a - 0.2) / 0.8 * 0.02)    # clamped to 10 deg
     assert "clamped" in src
+
+
+def test_path_figure_cli(lab_run, tmp_path):
+    from granudep.cli import main
+    files = []
+    for k, ds in enumerate(lab_run):
+        files.append(str(tmp_path / f"r{k}.nc"))
+        write_netcdf(ds, files[-1])
+    out = tmp_path / "path.png"
+    assert main(["path-figure", "-o", str(out), *files]) == 0
+    assert out.stat().st_size > 10_000 and out.read_bytes()[:4] == b"\x89PNG"
+    assert main(["path-figure", "-o", str(out), files[0], files[1], files[0]]) == 2

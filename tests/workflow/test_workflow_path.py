@@ -15,7 +15,7 @@ def test_default_config_runs_the_example_path(workdir):  # noqa: F811
     assert jobs["da_path_run"] == 2 and jobs["figure_path"] == 1
     assert re.search(r"granudep da config/da/example_path.yaml --no-deposition "
                      r"-o results/da_path/example_path_nodeposition.nc", out)
-    assert "granudep figure path -o results/figures/path_example_path.png" in out
+    assert "granudep path-figure -o results/figures/path_example_path.png" in out
 
 
 def test_ci_profile_runs_a_small_example_path(workdir):  # noqa: F811

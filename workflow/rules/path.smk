@@ -49,4 +49,4 @@ rule figure_path:
         runtime=10,
         mem_mb=2000,
     shell:
-        "MPLBACKEND=Agg granudep figure path -o {output} {input} > {log} 2>&1"
+        "MPLBACKEND=Agg granudep path-figure -o {output} {input} > {log} 2>&1"

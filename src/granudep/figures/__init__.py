@@ -12,6 +12,6 @@ sensitivity). :data:`FIGURES` maps each CLI name to its :class:`~.common.FigureS
 from __future__ import annotations
 
 from .common import REGISTRY as FIGURES  # noqa: F401  (filled by the imports below)
-from . import runout, isph2d, sections, regression, studies, path  # noqa: F401,E402
+from . import runout, isph2d, sections, regression, studies  # noqa: F401,E402
 
 __all__ = ["FIGURES"]

@@ -1,12 +1,14 @@
 """Runout on a path profile (issue 16): the bed with the release and the final deposit drawn on
 it, the travel-angle line, and the along-path envelopes (max depth, max speed, arrival time) of
-one or two DA path runs (with / without deposition)."""
+one or two DA path runs (with / without deposition). Command: ``granudep path-figure -o OUT.png
+RUN.nc [RUN2.nc]`` (registered by ``granudep.da.cli``; not one of the paper's figures, so not in
+``figures.FIGURES``)."""
 from __future__ import annotations
 
 import numpy as np
 
 from ..config import ConfigError
-from .common import add_inputs, load, need, new_figure, note, panel_label, register
+from .common import load, need, new_figure, note, panel_label
 
 STYLE = {1: dict(color="C0", ls="-", label="with deposition"), 0: dict(color="C3", ls="--", label="no deposition")}
 NEEDED = ("s", "x", "z", "final_deposit_depth", "max_flow_depth", "max_speed", "arrival_time", "travel_angle",
@@ -85,15 +87,3 @@ def path_figure(runs, exaggeration: float | None = None):
     note(fig, f"{ref.attrs['case']} on {ref.attrs['path_file']} (σ = {ref.attrs['path_smoothing_length']:g} m); "
               + "; ".join(lines) + f"; front threshold {ref.attrs['front_depth_threshold'] * 100:g} cm")
     return fig
-
-
-def _args(p):
-    add_inputs(p, "one or two DA path runs (with and/or without deposition) of the same case")
-    p.add_argument("--exaggeration", type=float, metavar="X", help="vertical exaggeration of the depths (default: auto)")
-
-
-@register("path", "runout on a slope profile: bed, release, final deposit, travel angle, envelopes", _args)
-def _fig(args):
-    if len(args.inputs) > 2:
-        raise ConfigError("path: give one or two DA path runs (NetCDF)")
-    return path_figure(args.inputs, args.exaggeration)
