@@ -30,6 +30,36 @@ WARM = f"{RESULTS}/.numba_warm"
 
 USER_CASES = {c["name"]: c for c in config.get("user_cases", [])}
 
+# DA runs on the user's slope profiles (issue 16): name -> entry {name, config, n_particles?}. The
+# YAML (with geometry.path) and its path CSV are the runs' inputs; both must exist when parsing.
+PATH_CASES = {c["name"]: c for c in config.get("path_cases", [])}
+
+
+def _path_csv(entry):
+    import yaml
+
+    cfg_file = entry["config"]
+    if not os.path.isfile(cfg_file):
+        raise WorkflowError(f"config path_cases: {entry['name']}: config file {cfg_file!r} not found")
+    with open(cfg_file) as fh:
+        data = yaml.safe_load(fh) or {}
+    csv = ((data.get("geometry") or {}).get("path") or {}).get("file")
+    if not csv:
+        raise WorkflowError(f"config path_cases: {entry['name']}: {cfg_file} has no geometry.path.file "
+                            "(a DA config on a path profile, see config/da/example_path.yaml)")
+    if not os.path.isfile(csv) and not os.path.isabs(csv):  # as granudep: else next to the YAML
+        csv = os.path.join(os.path.dirname(cfg_file), csv)
+    if not os.path.isfile(csv):
+        raise WorkflowError(f"config path_cases: {entry['name']}: path file {csv!r} (geometry.path.file in "
+                            f"{cfg_file}; relative to the repository root or to the YAML) not found")
+    return csv
+
+
+PATH_CSV = {name: _path_csv(entry) for name, entry in PATH_CASES.items()}
+_clash = sorted(set(PATH_CASES) & set(USER_CASES))
+if _clash:
+    raise WorkflowError(f"config path_cases: {', '.join(_clash)} also in user_cases (names become file names)")
+
 # 2D ISPH runs: every Table 1 case, the Table 5 geometries at 22 deg, and the user's cases.
 PAPER_ISPH_CASES = list(dict.fromkeys(config["isph"]["cases"] + config["isph"]["table5_geometries"]))
 ISPH_CASES = list(dict.fromkeys(PAPER_ISPH_CASES + list(USER_CASES)))
@@ -116,4 +146,6 @@ ALL_TARGETS = (
     + [f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"]
     + [figure_path(n) for n in ACTIVE_FIGURES]
     + [f"{RESULTS}/summary.md", f"{RESULTS}/caption_numbers.json", f"{RESULTS}/benchmarks/summary.csv"]
+    + [f"{RESULTS}/da_path/{c}_{v}.nc" for c in PATH_CASES for v in DA_VARIANTS]
+    + [f"{RESULTS}/figures/path_{c}.png" for c in PATH_CASES]
 )

@@ -8,6 +8,7 @@ All in the slope-aligned frame (x down-slope), depth h bed-normal, g = 9.81 m/s�
 * Savage & Hutter (1989): parabolic cap, a finite mass spreading on an incline with Coulomb
   friction and a constant k, in the frame of its centre of mass.
 * Coulomb block: a uniform slab on an incline (no depth gradient) moves and stops as a block.
+* Coulomb block on a curved bed (``exact_energy_line``): with and without the centripetal term.
 * ``tip_half_volume``: the point behind the exact h = 0 tip beyond which half a particle's volume
   lies — where the SPH front particle sits (compare like with like).
 """
@@ -91,3 +92,30 @@ def coulomb_block(t, u0: float, theta: float, delta: float, g: float = G):
     ts = u0 / -m
     tt = np.minimum(t, ts)
     return u0 * tt + 0.5 * m * tt * tt, np.where(t < ts, u0 + m * t, 0.0)
+
+
+def exact_energy_line(s, theta, kappa, mu: float, s0: float, u0: float = 0.0, centripetal: bool = True,
+                      g: float = G):
+    """Speed u(s) of a Coulomb block (friction μ) sliding down a curved bed from station s0 with
+    speed u0: with E = u²/2, dE/ds = g sinθ − μ (g cosθ + κ u²) (κ term only if ``centripetal``),
+    a linear ODE solved exactly by the integrating factor e^{2μK}, K(s) = ∫κ ds:
+    E(s) = e^{−2μK(s)} [E0 + ∫_{s0}^{s} g (sinθ − μ cosθ) e^{2μK} ds'] (trapezoid/Simpson on the
+    given stations). Without the κ term this is the energy line: E = E0 + g (z0 − z) − μ g (x − x0),
+    and a block from rest stops where the drop over the horizontal distance is tan α = μ.
+    Returns (s, u) from s0 to the stop (u = 0 there; the stop found by linear interpolation)."""
+    from scipy.integrate import cumulative_simpson
+    s_all = np.asarray(s, dtype=float)
+    keep = s_all > s0
+    s = np.concatenate([[s0], s_all[keep]])
+    theta = np.concatenate([[np.interp(s0, s_all, theta)], np.asarray(theta)[keep]])
+    kappa = np.concatenate([[np.interp(s0, s_all, kappa)], np.asarray(kappa)[keep]])
+    K = cumulative_simpson(kappa, x=s, initial=0.0) if centripetal else np.zeros_like(s)
+    src = g * (np.sin(theta) - mu * np.cos(theta)) * np.exp(2.0 * mu * K)
+    E = np.exp(-2.0 * mu * K) * (0.5 * u0 * u0 + cumulative_simpson(src, x=s, initial=0.0))
+    neg = np.flatnonzero(E[1:] <= 0.0) + 1
+    if neg.size:
+        j = int(neg[0])
+        s_stop = s[j - 1] + (s[j] - s[j - 1]) * E[j - 1] / (E[j - 1] - E[j])
+        s = np.concatenate([s[:j], [s_stop]])
+        E = np.concatenate([E[:j], [0.0]])
+    return s, np.sqrt(np.maximum(2.0 * E, 0.0))

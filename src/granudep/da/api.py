@@ -44,6 +44,9 @@ def run_da(case_or_config, deposition: bool = True, **overrides) -> xr.Dataset:
     any work; a run that blows up raises :class:`DARunError` carrying the partial dataset.
     """
     cfg = resolve(case_or_config, deposition=deposition, **overrides)
+    if cfg.geometry.path is not None:  # a slope profile (issue 16): granudep.da.path_run
+        from .path_run import run_path
+        return run_path(cfg, deposition)
     ka, kp = _k(cfg)
     progress = Progress(cfg.output.progress_every_s)
     label = f"{cfg.case} ({'deposition' if deposition else 'no deposition'})"

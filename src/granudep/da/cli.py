@@ -40,8 +40,22 @@ def _run(args) -> int:
               f"residual {ds.attrs['x_inf_residual']:.2e}); A = {ds.attrs['A']:.5g}, B = {ds.attrs['B']:.5g} "
               f"({ds.attrs['ab_source']}, {ds.attrs['coefficient_units']})")
     print(summary_line(ds))
+    if "travel_angle" in ds:  # a path run (geometry.path)
+        from .path_run import path_summary_line
+        print(path_summary_line(ds))
     print(f"written {out}")
     sys.stdout.flush()
+    return 0
+
+
+def _path_figure(args) -> int:
+    from ..config import ConfigError
+    from ..figures.path import path_figure
+    from ..io import save_figure
+    if len(args.runs) > 2:
+        raise ConfigError("path-figure: give one or two DA path runs (NetCDF)")
+    save_figure(path_figure(args.runs, args.exaggeration), args.output)
+    LOG.info("path figure written to %s", args.output)
     return 0
 
 
@@ -50,7 +64,8 @@ def register(subparsers) -> None:
         "da", help="run the 1D depth-averaged SPH model (Table 5 case or YAML), with or without deposition",
         description="Run the 1D DA SPH model of Sections 2.3-2.4; prints progress and, at the end, the final "
                     "runout dL/L0 (from the gate) and the flow time with the front definition.")
-    p.add_argument("case", metavar="CASE|CONFIG.yaml", help="1D-A30, 1D-A45, 1D-A70, 1D-A124 or a YAML config")
+    p.add_argument("case", metavar="CASE|CONFIG.yaml", help="1D-A30, 1D-A45, 1D-A70, 1D-A124 or a YAML config "
+                   "(with geometry.path: a run along a slope profile, e.g. config/da/example_path.yaml)")
     p.add_argument("--no-deposition", action="store_true", help="switch the deposition source term off")
     p.add_argument("-o", "--output", metavar="OUT.nc",
                    help="NetCDF output (default results/da/{case}_{deposition|nodeposition}.nc)")
@@ -60,3 +75,10 @@ def register(subparsers) -> None:
     p.add_argument("--x-inf-mode", choices=["self-consistent", "no-deposition", "user"], help="how x_inf in [x] is set")
     p.add_argument("--x-inf", type=float, metavar="X", help="x_inf in m from the back wall (x-inf-mode user)")
     p.set_defaults(func=_run)
+    q = subparsers.add_parser(
+        "path-figure", help="figure of DA runs on a path profile: bed, release, final deposit, travel angle, envelopes",
+        description="Profile figure of one or two `granudep da` runs with geometry.path (with/without deposition).")
+    q.add_argument("runs", nargs="+", metavar="RUN.nc", help="DA path runs of the same case")
+    q.add_argument("-o", "--output", required=True, metavar="OUT.png")
+    q.add_argument("--exaggeration", type=float, metavar="X", help="vertical exaggeration of the depths (default: auto)")
+    q.set_defaults(func=_path_figure)

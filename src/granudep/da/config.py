@@ -14,6 +14,7 @@ from typing import Any, Literal, Mapping
 
 from ..cases import check_case_name, material, momentum_scale, table5
 from ..config import ConfigError, build, load_yaml, merge, param
+from .path import PathGeometry, anchor_path_file
 
 _GLASS = material("glass_beads")
 
@@ -26,6 +27,8 @@ class Geometry:
     x_max: float | None = param(None, gt=0.0, unit="m",
                                 doc="end of the domain and deposit grid; null: L0 + 60 H0")
     back_wall: bool = param(True, doc="mirror (ghost) wall at x = 0 holding the column")
+    path: PathGeometry | None = param(None, doc="a slope profile (granudep.da.path); with it theta_deg and x_max "
+                                                "are not used (the bed and its end come from the path)")
 
     def validate(self, prefix: str) -> None:
         p = f"{prefix}." if prefix else ""
@@ -211,7 +214,7 @@ def resolve(case_or_config: str | Path | Mapping | DAConfig, deposition: bool | 
             base = merge(case_mapping(base["case"]), base)
     elif isinstance(case_or_config, (str, Path)) and (str(case_or_config).endswith((".yaml", ".yml"))
                                                       or Path(case_or_config).is_file()):
-        base = load_yaml(case_or_config)
+        base = anchor_path_file(load_yaml(case_or_config), case_or_config)
         if "case" not in base:
             base["case"] = Path(case_or_config).stem
         if isinstance(base.get("case"), str) and base["case"] in set(table5().case_id):

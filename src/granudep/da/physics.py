@@ -105,3 +105,30 @@ def deposition_momentum_dv(removed_depth: float, h: float, g: float, tan_phi_i: 
     if h <= 0.0:
         return 0.0
     return g * tan_phi_i * removed_depth / h
+
+
+# ----------------------------------------------------------------------------------------------
+# on a path profile (issue 16; da/path_solver.py): curved bed after Savage & Hutter (1991), width
+# ----------------------------------------------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def bed_normal_acceleration(g: float, cos_theta: float, kappa: float, u: float) -> float:
+    """N = g cosθ + κ u² (m/s²): the basal normal stress per unit mass and depth, ξ/(ρh), on a
+    bed of curvature κ (> 0 concave: the slope eases and the flow is pressed onto the bed;
+    Savage & Hutter 1991). May be negative on a convex break: the caller clips it at 0."""
+    return g * cos_theta + kappa * u * u
+
+
+@njit(cache=True, inline="always")
+def depth_from_area(area: float, width: float) -> float:
+    """h = A/b: depth from the SPH cross-section A = Σ V_j W_ij (eq 20 with volumes) in a channel
+    of width b (b = 1 and V per unit width without a width column)."""
+    return area / width
+
+
+@njit(cache=True, inline="always")
+def depth_gradient_from_area(darea: float, h: float, width: float, dwidth: float) -> float:
+    """∂h/∂s = (∂A/∂s − h db/ds)/b, the depth gradient the earth-pressure term needs
+    (−k g cosθ ∂h/∂s per unit mass in a rectangular channel of slowly varying width)."""
+    return (darea - h * dwidth) / width
+
