@@ -35,15 +35,18 @@ def _check(rec, cfg, ds_fn):
         LOG.warning("DA %s: %s — flow time undefined; raise numerics.t_end", cfg.case, rec.message)
 
 
-def run_da(case_or_config, deposition: bool = True, **overrides) -> xr.Dataset:
+def run_da(case_or_config, deposition: bool | dict = True, **overrides) -> xr.Dataset:
     """Run a DA case: a Table 5 name (``"1D-A70"``), a YAML path, a mapping or a ``DAConfig``.
 
-    ``deposition`` switches the deposition source term (it overrides ``deposition.enabled``);
+    ``deposition`` switches the deposition source term (it overrides ``deposition.enabled``), or is
+    the ``deposition`` section itself (``deposition={"ab_source": "user", "A": -0.03, "B": 0.04}``:
+    deposition on, unless the mapping says ``enabled: false``);
     ``overrides`` are config sections (``numerics={"cfl": 0.1}``) or unique keys
     (``n_particles=500``, ``x_inf_mode="user"``, ``x_inf=0.9``). Bad input raises ConfigError before
     any work; a run that blows up raises :class:`DARunError` carrying the partial dataset.
     """
     cfg = resolve(case_or_config, deposition=deposition, **overrides)
+    deposition = cfg.deposition.enabled
     ka, kp = _k(cfg)
     progress = Progress(cfg.output.progress_every_s)
     label = f"{cfg.case} ({'deposition' if deposition else 'no deposition'})"

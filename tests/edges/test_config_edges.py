@@ -1,0 +1,171 @@
+"""Issue 14, items 1-3, 7, 13: paper-case identity, section overrides, YAML 1.2 numbers, impossible inputs."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+import granudep
+from granudep.config import ConfigError, load_yaml, yaml12_numbers
+from granudep.da.config import resolve
+from granudep.isph.config import load_config
+
+
+# --- item 1: a paper case name survives no change of geometry or material ------------------------
+@pytest.mark.parametrize("overrides, key", [
+    ({"theta_deg": 16.0}, "geometry.theta_deg"),
+    ({"H0": 0.05}, "geometry.H0"),
+    ({"phi_deg": 24.0}, "material.phi_deg"),
+    ({"phi_wall_deg": 20.0}, "wall.phi_wall_deg"),
+])
+def test_isph_paper_case_with_changed_geometry_or_material_is_refused(overrides, key):
+    with pytest.raises(ConfigError, match=rf"^{key}: .* changes the paper case 'T22-A70'"):
+        load_config("T22-A70", **overrides)
+
+
+def test_isph_paper_case_yaml_with_changed_geometry_is_refused(tmp_path):
+    f = tmp_path / "c.yaml"
+    f.write_text("case: T22-A70\ngeometry: {theta_deg: 16}\n")
+    with pytest.raises(ConfigError, match="geometry.theta_deg: 16.0 changes the paper case"):
+        load_config(f)
+    f.write_text("case: my-T22\ngeometry: {theta_deg: 16, L0: 0.2, H0: 0.14}\n")
+    assert load_config(f).geometry.theta_deg == 16.0  # same geometry under its own name runs
+
+
+def test_isph_paper_case_numerics_may_change():
+    cfg = load_config("T22-A70", dx=0.01, t_end=1.0)
+    assert cfg.case == "T22-A70" and cfg.numerics.dx == 0.01
+
+
+@pytest.mark.parametrize("overrides, key", [
+    ({"H0": 0.05}, "geometry.H0"),
+    ({"theta_deg": 16.0}, "geometry.theta_deg"),
+    ({"phi_internal_deg": 27.5}, "material.phi_internal_deg"),
+])
+def test_da_paper_case_with_changed_geometry_is_refused(overrides, key):
+    with pytest.raises(ConfigError, match=rf"^{key}: .* changes the paper case '1D-A70'"):
+        resolve("1D-A70", **overrides)
+
+
+def test_da_ab_source_paper_refused_for_a_changed_geometry(tmp_path):
+    f = tmp_path / "c.yaml"
+    f.write_text("case: my-col\ngeometry: {L0: 0.2, H0: 0.05, theta_deg: 22}\ndeposition: {ab_source: paper}\n")
+    with pytest.raises(ConfigError, match="deposition.ab_source: 'paper' needs a Table 5 case"):
+        resolve(f)
+
+
+# --- item 2: granudep.monitor stays callable -------------------------------------------------------
+def test_monitor_entry_point_survives_subpackage_imports():
+    code = ("import granudep, importlib; importlib.import_module('granudep.monitor.api');"
+            "importlib.import_module('granudep.monitor.cli'); import granudep.monitor.sections;"
+            "assert callable(granudep.monitor), granudep.monitor")
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+
+# --- item 3: section overrides in run_da and run_isph ----------------------------------------------
+def test_resolve_takes_the_deposition_section():
+    cfg = resolve("1D-A70", deposition={"ab_source": "user", "A": -0.1, "B": 0.1})
+    assert cfg.deposition.enabled and cfg.deposition.ab_source == "user" and cfg.deposition.A == -0.1
+    assert not resolve("1D-A70", deposition={"enabled": False}).deposition.enabled
+    with pytest.raises(ConfigError, match="deposition.bogus: unknown key"):
+        resolve("1D-A70", deposition={"bogus": 1})
+    with pytest.raises(ConfigError, match="^deposition: must be true/false or a mapping"):
+        resolve("1D-A70", deposition="yes")
+
+
+def test_run_da_uses_the_deposition_section(monkeypatch):
+    import granudep.da.api as api
+    seen = {}
+
+    def fake_coefficients(cfg):
+        seen["cfg"] = cfg
+        raise ConfigError("stop here")
+
+    monkeypatch.setattr(api, "coefficients", fake_coefficients)
+    monkeypatch.setattr(api, "simulate", lambda *a, **k: (_ for _ in ()).throw(AssertionError("no run")))
+    with pytest.raises(ConfigError, match="stop here"):
+        granudep.run_da("1D-A70", deposition={"ab_source": "user", "A": -0.2, "B": 0.3})
+    assert seen["cfg"].deposition.A == -0.2 and seen["cfg"].deposition.ab_source == "user"
+
+
+def test_isph_section_overrides():
+    cfg = load_config("T22-A70", numerics={"dx": 0.01, "cfl": 0.1}, output={"interval": 0.05})
+    assert cfg.numerics.dx == 0.01 and cfg.numerics.cfl == 0.1 and cfg.output.interval == 0.05
+    with pytest.raises(ConfigError, match="numerics.dxx: unknown key"):
+        load_config("T22-A70", numerics={"dxx": 0.01})
+    with pytest.raises(ConfigError, match="^numerics: must be a mapping"):
+        load_config("T22-A70", numerics=0.01)
+
+
+# --- item 7: impossible inputs ------------------------------------------------------------------
+def test_isph_slope_steeper_than_friction_is_refused():
+    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < material.phi_deg = 25.5"):
+        load_config({"case": "steep", "geometry": {"theta_deg": 30.0}})
+    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < wall.phi_wall_deg = 20.0"):
+        load_config({"case": "steep", "geometry": {"theta_deg": 22.0}, "wall": {"phi_wall_deg": 20.0}})
+
+
+def test_da_slope_steeper_than_basal_friction_is_refused():
+    data = {"case": "steep", "geometry": {"theta_deg": 24.0},
+            "material": {"phi_basal_deg": 20.0, "phi_internal_deg": 30.0},
+            "numerics": {"earth_pressure": "savage_hutter"}}
+    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < material.phi_basal_deg = 20.0"):
+        resolve(data, deposition=False)
+
+
+def test_da_x_inf_without_user_mode_is_refused():
+    with pytest.raises(ConfigError, match="^deposition.x_inf: used only with deposition.x_inf_mode 'user'"):
+        resolve("1D-A70", x_inf=1.0)
+    assert resolve("1D-A70", x_inf=1.0, x_inf_mode="user").deposition.x_inf == 1.0
+
+
+def test_empty_yaml_is_refused(tmp_path):
+    f = tmp_path / "empty.yaml"
+    f.write_text("# nothing\n")
+    with pytest.raises(ConfigError, match="the config file is empty"):
+        load_config(f)
+    with pytest.raises(ConfigError, match="the config file is empty"):
+        resolve(f)
+
+
+def test_non_utf8_yaml_is_one_line(tmp_path):
+    f = tmp_path / "latin1.yaml"
+    f.write_bytes("case: caf\xe9\n".encode("latin-1"))
+    with pytest.raises(ConfigError, match="not a UTF-8 text file") as exc:
+        load_yaml(f)
+    assert "\n" not in str(exc.value)
+
+
+# --- item 13: YAML 1.2 numbers ---------------------------------------------------------------------
+def test_yaml_reads_numbers_as_yaml_1_2(tmp_path):
+    f = tmp_path / "n.yaml"
+    f.write_text("a: 5.0e4\nb: 1e-3\nc: -2E+2\nd: 1\ne: '5.0e4'\nf: 0.5\ng: 1.5e3x\n")
+    d = load_yaml(f)
+    assert d["a"] == 5.0e4 and isinstance(d["a"], float)
+    assert d["b"] == 1e-3 and d["c"] == -200.0
+    assert d["d"] == 1 and isinstance(d["d"], int)
+    assert d["e"] == "5.0e4" and d["f"] == 0.5 and d["g"] == "1.5e3x"
+
+
+def test_isph_yaml_with_eta_max_5e4(tmp_path):
+    f = tmp_path / "c.yaml"
+    f.write_text("case: mine\nrheology: {eta_max: 5.0e4, eta_min: 1e-3}\n")
+    cfg = load_config(f)
+    assert cfg.rheology.eta_max == 5.0e4 and cfg.rheology.eta_min == 1e-3
+
+
+def test_yaml12_numbers_converts_what_yaml11_left_as_strings():
+    assert yaml12_numbers({"a": ["5.0e4", "x", "1e-3", "12"], "b": {"c": "2e5"}}) == \
+        {"a": [5.0e4, "x", 1e-3, "12"], "b": {"c": 2e5}}
+
+
+def test_monitor_called_twice_in_one_session():
+    import pathlib
+    sys.path.insert(0, str(pathlib.Path(__file__).parents[1] / "monitor"))
+    from monitor_synth import ramp_run
+    run = ramp_run(case="T22-A70", dx=0.004)
+    a = granudep.monitor(run)
+    b = granudep.monitor(run, width_factor=3.0)
+    assert a.sizes["section"] == b.sizes["section"] == 11 and b.attrs["width_factor"] == 3.0
