@@ -68,19 +68,90 @@ def atomic_path(path: str | Path, write: Callable[[Path], None]) -> Path:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    clean_stale_temporaries(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     tmp = Path(tmp)
+    from .signals import deferred_signals
     try:
-        write(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual permissions
-        os.replace(tmp, path)
+        with deferred_signals():  # no KeyboardInterrupt inside netCDF4/HDF5 (it hung on xarray's lock)
+            write(tmp)
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual permissions
+            os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
     return path
+
+
+def check_output(path: str | Path, suffixes: tuple[str, ...] | None = (".nc",), what: str = "output") -> Path:
+    """Refuse an output path before any work: wrong suffix, or a folder that cannot be written.
+
+    Creates the folder (as the write would) and a temporary file in it, removed at once. Raises a
+    one-line ConfigError such as ``output: cannot write to results/isph (Read-only file system)``.
+    """
+    from .config import ConfigError
+    path = Path(path)
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise ConfigError(f"{what}: {path} must end in {' or '.join(suffixes)} (the file is "
+                          f"{'NetCDF' if suffixes == ('.nc',) else suffixes[0]}; got {path.suffix or 'no suffix'!r})")
+    if path.is_dir():
+        raise ConfigError(f"{what}: {path} is a folder; give a file name")
+    folder = path.parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".probe", dir=folder)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise ConfigError(f"{what}: cannot write to {folder}/ ({exc.strerror or exc})") from None
+    return path
+
+
+def check_output_dir(folder: str | Path, what: str = "output") -> Path:
+    """Like :func:`check_output` for an output folder."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        from .config import ConfigError
+        raise ConfigError(f"{what}: {folder} exists and is not a folder")
+    check_output(folder / "probe", suffixes=None, what=what)
+    return folder
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def clean_stale_temporaries(path: str | Path, min_age_s: float = 3600.0) -> list[Path]:
+    """Remove the ``.NAME.PID.XXXX.tmp`` files that killed writers (SIGKILL, power loss) left next
+    to ``path``: those whose writer process PID is gone (and, without a PID, older than
+    ``min_age_s``). A writer running now keeps its file. Returns the removed paths.
+    """
+    import time
+    path = Path(path)
+    removed: list[Path] = []
+    if not path.parent.is_dir():
+        return removed
+    now = time.time()
+    for tmp in path.parent.glob(f".{path.name}.*.tmp"):
+        token = tmp.name[len(path.name) + 2:].split(".", 1)[0]
+        try:
+            stale = (not _pid_alive(int(token))) if token.isdigit() and "." in tmp.name[len(path.name) + 2:-4] \
+                else now - tmp.stat().st_mtime >= min_age_s
+            if stale:
+                tmp.unlink()
+                removed.append(tmp)
+        except OSError:
+            pass
+    return removed
 
 
 def write_netcdf(ds: xr.Dataset, path: str | Path) -> Path:
@@ -104,10 +175,29 @@ def save_figure(fig, path: str | Path, **kwargs) -> Path:
     return atomic_path(path, lambda tmp: fig.savefig(tmp, format=fmt, **kwargs))
 
 
-def open_dataset(path: str | Path) -> xr.Dataset:
-    """Open a granudep NetCDF file fully into memory (the file is closed on return)."""
-    with xr.open_dataset(path) as ds:
-        return ds.load()
+def open_dataset(path: str | Path, what: str = "input") -> xr.Dataset:
+    """Open a granudep NetCDF file fully into memory (the file is closed on return).
+
+    A missing, empty, truncated or non-NetCDF file raises a one-line ConfigError naming it.
+    """
+    from .config import ConfigError
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"{what}: file not found: {path}")
+    size = path.stat().st_size
+    if size == 0:
+        raise ConfigError(f"{what}: {path} is empty (0 bytes; an interrupted copy or write?)")
+    with open(path, "rb") as fh:
+        magic = fh.read(8)
+    if not (magic.startswith(b"CDF") or magic.startswith(b"\x89HDF\r\n\x1a\n")):
+        raise ConfigError(f"{what}: {path} is not a NetCDF file (starts with {magic[:8]!r})")
+    try:
+        with xr.open_dataset(path) as ds:
+            return ds.load()
+    except (OSError, ValueError, RuntimeError, KeyError, IndexError) as exc:
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise ConfigError(f"{what}: cannot read {path} as NetCDF ({size} bytes; truncated or damaged? "
+                          f"{reason[:200]})") from None
 
 
 def var(data, dims, units: str, long_name: str, **attrs) -> xr.Variable:

@@ -210,6 +210,9 @@ def overrides_mapping(overrides: Mapping[str, Any]) -> dict:
             out = merge(out, {key: dict(value)})
         elif key == "case":
             out["case"] = value
+        elif "." in key and key.split(".", 1)[0] in SECTIONS:  # numerics.cfl=0.3
+            sec, leaf_key = key.split(".", 1)
+            out = merge(out, {sec: {leaf_key: value}})
         elif key in leaf:
             out = merge(out, {leaf[key]: {key: value}})
         else:

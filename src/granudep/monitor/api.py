@@ -30,7 +30,7 @@ def _load(run) -> xr.Dataset:
     path = Path(run)
     if not path.is_file():
         raise ConfigError(f"run: file not found: {path}")
-    return open_dataset(path)
+    return open_dataset(path, what="run")
 
 
 def _config(overrides: dict) -> MonitorConfig:

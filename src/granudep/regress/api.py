@@ -25,7 +25,7 @@ def _load(item) -> tuple[xr.Dataset, str]:
     path = Path(item)
     if not path.is_file():
         raise ConfigError(f"sections: file not found: {path}")
-    return open_dataset(path), str(path)
+    return open_dataset(path, what="sections"), str(path)
 
 
 def regress(sections, **overrides) -> dict:
