@@ -42,7 +42,8 @@ def _cmd_warmup(args) -> int:
 
 def _cmd_verify(args) -> int:
     """Run a stage's analytic verification suite and write the table (CSV) the report reads."""
-    from .io import write_text
+    from .io import check_output, write_text
+    check_output(args.output, suffixes=(".csv",))  # before the suite runs
     module = importlib.import_module(f"granudep.{args.stage}.verification")
     table = module.run_all(quick=args.quick)
     print(table.to_string(index=False))

@@ -84,7 +84,7 @@ def test_run_da_uses_the_deposition_section(monkeypatch):
         raise ConfigError("stop here")
 
     monkeypatch.setattr(api, "coefficients", fake_coefficients)
-    monkeypatch.setattr(api, "simulate", lambda *a, **k: (_ for _ in ()).throw(AssertionError("no run")))
+    monkeypatch.setattr(api, "_simulate", lambda *a, **k: (_ for _ in ()).throw(AssertionError("no run")))
     with pytest.raises(ConfigError, match="stop here"):
         granudep.run_da("1D-A70", deposition={"ab_source": "user", "A": -0.2, "B": 0.3})
     assert seen["cfg"].deposition.A == -0.2 and seen["cfg"].deposition.ab_source == "user"
@@ -169,3 +169,99 @@ def test_monitor_called_twice_in_one_session():
     a = granudep.monitor(run)
     b = granudep.monitor(run, width_factor=3.0)
     assert a.sizes["section"] == b.sizes["section"] == 11 and b.attrs["width_factor"] == 3.0
+
+
+# --- items 5, 8, 11: outputs checked before work; unreadable inputs one line -----------------------
+def _read_only_folder(tmp_path):
+    """A folder nobody can write to (root ignores permissions: then /proc, which no one can)."""
+    import os
+    if os.geteuid() != 0:
+        d = tmp_path / "ro"
+        d.mkdir()
+        d.chmod(0o500)
+        return d
+    return __import__("pathlib").Path("/proc/granudep-no-such-folder")
+
+
+@pytest.mark.parametrize("argv", [
+    ["isph", "T22-A70", "--dx", "0.02", "--t-end", "0.02"],
+    ["da", "1D-A70", "--no-deposition", "--n-particles", "40"],
+])
+def test_run_commands_check_the_output_before_any_work(tmp_path, capsys, monkeypatch, argv):
+    from granudep.cli import main
+    import granudep.isph.api as iapi
+    import granudep.da.api as dapi
+    monkeypatch.setattr(iapi, "run", lambda *a, **k: (_ for _ in ()).throw(AssertionError("ran")))
+    monkeypatch.setattr(dapi, "_simulate", lambda *a, **k: (_ for _ in ()).throw(AssertionError("ran")))
+    ro = _read_only_folder(tmp_path)
+    assert main(argv + ["-o", str(ro / "out.nc")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("granudep: error: output: cannot write to "), err
+    assert main(argv + ["-o", str(tmp_path / "out.txt")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "out.txt must end in .nc" in err[0], err
+
+
+def test_run_isph_api_checks_the_output_before_the_run(tmp_path, monkeypatch):
+    import granudep.isph.api as iapi
+    monkeypatch.setattr(iapi, "run", lambda *a, **k: (_ for _ in ()).throw(AssertionError("ran")))
+    with pytest.raises(ConfigError, match="cannot write to"):
+        granudep.run_isph("T22-A70", output=_read_only_folder(tmp_path) / "x.nc", dx=0.02)
+
+
+@pytest.mark.parametrize("content", [b"", b"hello, this is text\n", None])
+@pytest.mark.parametrize("command", ["monitor", "monitor-wm", "regress", "isph-vtk"])
+def test_unreadable_netcdf_inputs_are_one_line(tmp_path, capsys, content, command):
+    from granudep.cli import main
+    from granudep.io import write_netcdf
+    bad = tmp_path / "bad.nc"
+    if content is None:  # a truncated NetCDF/HDF5 file
+        import numpy as np
+        import xarray as xr
+        from granudep.io import provenance, var
+        ds = provenance(xr.Dataset({"a": var(np.arange(10000.0), ("t",), "m", "a")}), case="c", config_yaml="{}")
+        write_netcdf(ds, tmp_path / "full.nc")
+        bad.write_bytes((tmp_path / "full.nc").read_bytes()[:3000])
+    else:
+        bad.write_bytes(content)
+    extra = {"regress": ["-o", str(tmp_path / "reg")], "isph-vtk": ["-o", str(tmp_path / "vtk")]}.get(command, [])
+    assert main([command, str(bad)] + extra) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(bad) in err[0] and ("NetCDF" in err[0] or "empty" in err[0]), err
+
+
+def test_monitor_x_inf_beyond_the_bed_is_refused(tmp_path):
+    import pathlib
+    sys.path.insert(0, str(pathlib.Path(__file__).parents[1] / "monitor"))
+    from monitor_synth import ramp_run
+    run = ramp_run(case="T22-A70", dx=0.004)
+    end = float(run.attrs.get("domain_length", float(run.x.max())))
+    with pytest.raises(ConfigError, match=r"^x_inf: must be <= .* the end of the run's bed"):
+        granudep.monitor(run, x_inf=end + 1.0)
+
+
+def test_da_cli_x_inf_alone_means_user_mode(monkeypatch):
+    from granudep.cli import main
+    import granudep.da.api as dapi
+    seen = {}
+
+    def fake(cfg, **kw):
+        seen["cfg"] = cfg
+        raise ConfigError("stop")
+
+    monkeypatch.setattr(dapi, "run_da", fake)
+    assert main(["da", "1D-A70", "--x-inf", "1.2", "-o", "/tmp/granudep-test-xinf.nc"]) == 2
+    assert seen["cfg"].deposition.x_inf_mode == "user" and seen["cfg"].deposition.x_inf == 1.2
+
+
+def test_set_on_every_run_command(monkeypatch):
+    from granudep.cli import main
+    import granudep.isph.api as iapi
+    seen = {}
+    monkeypatch.setattr(iapi, "run_config", lambda cfg, **k: seen.setdefault("cfg", cfg) and None)
+    assert main(["isph", "T22-A70", "--set", "numerics.cfl=0.1", "--set", "stop_at_rest=false",
+                 "--set", "eta_max=5.0e4", "-o", "/tmp/granudep-test-set.nc"]) == 0
+    c = seen["cfg"]
+    assert c.numerics.cfl == 0.1 and c.output.stop_at_rest is False and c.rheology.eta_max == 5.0e4
+    assert main(["isph", "T22-A70", "--set", "nonsense"]) == 2
+    assert main(["isph", "T22-A70", "--threads", "0"]) == 2

@@ -63,6 +63,12 @@ def _geometry(run: xr.Dataset, cfg: MonitorConfig) -> dict:
         raise ConfigError("run.final_front_position: missing; give monitor.x_inf (m from the back wall)")
     if not (math.isfinite(x_inf) and x_inf > g["L0"]):
         raise ConfigError(f"x_inf: must be > L0 = {g['L0']} m (got {x_inf!r}); the sections span [L0, x_inf]")
+    bed_end = float(run.attrs["domain_length"]) if "domain_length" in run.attrs else \
+        float(np.nanmax(np.asarray(run["x"].values, float)))
+    if cfg.x_inf is not None and x_inf > bed_end:
+        raise ConfigError(f"x_inf: must be <= {bed_end:.6g} m, the end of the run's bed"
+                          f"{'' if 'domain_length' in run.attrs else ' (its farthest particle)'}; the sections "
+                          f"span [L0, x_inf] (got {x_inf!r})")
     time_to_rest = float(run["time_to_rest"]) if "time_to_rest" in run.variables else math.nan
     status = str(run.attrs.get("status", ""))
     # the deposition record is complete once the run rested, or once every particle is deposited
