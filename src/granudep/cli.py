@@ -54,9 +54,18 @@ def _cmd_verify(args) -> int:
     return 0
 
 
+class _Version(argparse.Action):
+    """``--version``: one unwrapped line with the release and the git commit."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from ._version import commit
+        print(f"granudep {__version__} (commit {commit() or 'unknown: not a git checkout'})")
+        parser.exit(0)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="granudep", description=__doc__.splitlines()[0])
-    parser.add_argument("--version", action="version", version=f"granudep {__version__}")
+    parser.add_argument("--version", action=_Version, nargs=0, help="print the version and the commit, then exit")
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     p = sub.add_parser("cases", help="list the paper's named cases (Tables 1 and 5)")

@@ -53,7 +53,7 @@ def test_stale_temporaries_of_dead_writers_are_removed(tmp_path):
         p.write_bytes(b"half a file")
     write_netcdf(_small_dataset(), out)
     assert not stale.exists() and live.exists() and other.exists()
-    assert xr.open_dataset(out).sizes["time"] == 5
+    assert granudep.load(out).sizes["time"] == 5
 
 
 def test_da_restart_continues_bit_identically(tmp_path, monkeypatch):
@@ -106,7 +106,7 @@ def test_isph_stop_request_writes_the_partial_output(tmp_path):
     finally:
         STOP.clear()
     assert not out.exists()  # never a partial run under the final name
-    part = xr.open_dataset(tmp_path / "T22-A70.interrupted.nc")
+    part = granudep.load(tmp_path / "T22-A70.interrupted.nc")
     assert part.attrs["status"].startswith("interrupted") and part.sizes["time"] >= 1
 
 
@@ -137,6 +137,6 @@ def test_da_cli_sigterm_then_restart_auto(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "continuing" in done.stderr or "restored" in done.stderr, done.stderr
     ref = granudep.run_da("1D-A70", **DA_ARGS)
-    got = xr.open_dataset(out)
+    got = granudep.load(out)
     for name in ("front_position", "x", "u", "deposit_depth", "x_inf_history"):
         assert np.array_equal(ref[name].values, got[name].values, equal_nan=True), name

@@ -26,6 +26,9 @@ REQUIRED_ATTRS = ("theta_deg", "L0", "H0", "dx", "smoothing_length", "particle_v
 
 def _load(run) -> xr.Dataset:
     if isinstance(run, xr.Dataset):
+        if "time" in run.variables and np.issubdtype(run["time"].dtype, np.datetime64):
+            raise ConfigError("run.time: decoded as dates; open the run with granudep.load(path) (or "
+                              "xarray.open_dataset(path, decode_times=False)): times are seconds since release")
         return run
     path = Path(run)
     if not path.is_file():
@@ -186,7 +189,8 @@ def monitor(run, **overrides) -> xr.Dataset:
     ds = _base_dataset(run, cfg, g, w)
     for name, (units, long_name) in _VARS.items():
         ds[name] = var(q[name], ("section", "time"), units, long_name)
-    provenance(ds, case=_case(run), config_yaml=to_yaml(cfg))
+    provenance(ds, case=_case(run), config_yaml=to_yaml(cfg),
+               title=f"granudep monitoring sections (eqs 15-17) of 2D run {_case(run)}")
     return ds
 
 
@@ -235,7 +239,8 @@ def monitor_wm(run, **overrides) -> xr.Dataset:
     ds["n_rms"] = var(n.astype(np.int32), ("width_factor", "section"), "1",
                       "number of samples in the RMS deviation")
     ds.attrs["wm_reference"] = cfg.wm_reference
-    provenance(ds, case=_case(run), config_yaml=to_yaml(cfg))
+    provenance(ds, case=_case(run), config_yaml=to_yaml(cfg),
+               title=f"granudep section-width sensitivity (Appendix) of 2D run {_case(run)}")
     return ds
 
 
