@@ -265,3 +265,79 @@ def test_set_on_every_run_command(monkeypatch):
     assert c.numerics.cfl == 0.1 and c.output.stop_at_rest is False and c.rheology.eta_max == 5.0e4
     assert main(["isph", "T22-A70", "--set", "nonsense"]) == 2
     assert main(["isph", "T22-A70", "--threads", "0"]) == 2
+
+
+def test_benchmark_summary_is_world_readable(tmp_path):
+    import os
+    import pathlib
+    import subprocess
+    root = pathlib.Path(__file__).resolve().parents[2]
+    bench = tmp_path / "benchmarks" / "isph"
+    bench.mkdir(parents=True)
+    (bench / "T22-A70.tsv").write_text("s\th:m:s\tmax_rss\n1.5\t0:00:01\t100.0\n")
+    out = tmp_path / "benchmarks" / "summary.csv"
+    old = os.umask(0o022)
+    try:
+        subprocess.run([sys.executable, str(root / "benchmarks" / "workflow_summary.py"), str(tmp_path / "benchmarks"),
+                        "-o", str(out)], check=True, capture_output=True)
+    finally:
+        os.umask(old)
+    assert out.stat().st_mode & 0o777 == 0o644
+    assert "T22-A70" in out.read_text()
+
+
+def test_version_names_the_commit(capsys):
+    from granudep.cli import main
+    from granudep._version import commit
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out.strip()
+    assert out.startswith(f"granudep {granudep.__version__} (commit ") and "\n" not in out
+    c = commit()
+    if c is not None:  # a git checkout: the version carries the commit
+        assert c.split("+")[0] in out and f"+g{c[:10]}" in granudep.__version__
+
+
+def test_python_api_progress_lines_in_logs(caplog):
+    from granudep.progress import BarProgress, make_progress
+    p = make_progress(None, 0.0)  # not a terminal under pytest: plain lines
+    assert not isinstance(p, BarProgress)
+    with caplog.at_level("INFO", logger="granudep"):
+        p(lambda: "step 1")
+    assert "step 1" in caplog.text
+    bar = make_progress("bar", 0.0, total=2.0)
+    bar.update(1.0)
+    assert isinstance(bar, BarProgress) and bar.bar.n == 1.0
+    bar.close()
+    with pytest.raises(ConfigError, match="progress: must be one of"):
+        make_progress("loud", 1.0)
+
+
+def test_vtk_binary_with_velocity_and_deposited_flag(tmp_path):
+    import base64
+    import re
+    import numpy as np
+    from granudep.cli import main
+    nc = tmp_path / "r.nc"
+    granudep.run_isph("T22-A70", output=nc, dx=0.02, t_end=0.02, progress=False)
+    assert main(["isph-vtk", str(nc), "-o", str(tmp_path / "bin")]) == 0
+    assert main(["isph-vtk", str(nc), "-o", str(tmp_path / "asc"), "--encoding", "ascii"]) == 0
+    text = sorted((tmp_path / "bin").glob("*.vtp"))[-1].read_text()
+    asc = sorted((tmp_path / "asc").glob("*.vtp"))[-1].read_text()
+    assert len(text) < len(asc)
+    run = granudep.load(nc).isel(time=-1)
+
+    def array(name, dtype):
+        m = re.search(rf'Name="{name}"[^>]*format="binary">([^<]+)<', text)
+        raw = m.group(1)
+        head = base64.b64decode(raw[:12])  # 8-byte UInt64 header -> 12 base64 characters
+        n = int(np.frombuffer(head, np.uint64)[0])
+        return np.frombuffer(base64.b64decode(raw[12:]), dtype)[: n // np.dtype(dtype).itemsize]
+
+    vel = array("velocity", np.float32).reshape(-1, 3)
+    np.testing.assert_array_equal(vel[:, 0], run.u.values.astype(np.float32))
+    np.testing.assert_array_equal(vel[:, 1], run.v.values.astype(np.float32))
+    dep = array("deposited", np.int8)
+    np.testing.assert_array_equal(dep, (np.hypot(run.u.values, run.v.values) < 0.1).astype(np.int8))
+    assert 'Name="free_surface"' in text and 'Vectors="velocity"' in text
