@@ -16,7 +16,7 @@ from .progress import LOG, setup_logging
 
 #: stage modules providing sub-commands, in the paper's order
 STAGES = ("granudep.da.cli", "granudep.isph.cli", "granudep.monitor.cli", "granudep.regress.cli",
-          "granudep.figures.cli")
+          "granudep.figures.cli", "granudep.config_cli")
 
 
 def _cmd_cases(args) -> int:
@@ -105,9 +105,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         LOG.error("interrupted")
         return 130
+    except BrokenPipeError:  # `granudep config show X | head`: the reader left; nothing to say
+        import os
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except OSError as exc:  # a disk or permission problem while writing: one line, not a traceback
-        where = f" {exc.filename}" if getattr(exc, "filename", None) else ""
-        print(f"granudep: error:{where}: {exc.strerror or exc}", file=sys.stderr)
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        print(f"granudep: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 1
 
 

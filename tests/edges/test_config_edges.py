@@ -341,3 +341,28 @@ def test_vtk_binary_with_velocity_and_deposited_flag(tmp_path):
     dep = array("deposited", np.int8)
     np.testing.assert_array_equal(dep, (np.hypot(run.u.values, run.v.values) < 0.1).astype(np.int8))
     assert 'Name="free_surface"' in text and 'Vectors="velocity"' in text
+
+
+@pytest.mark.parametrize("stage", ["isph", "da", "monitor", "regress"])
+def test_config_template_is_a_valid_config_of_the_stage(tmp_path, capsys, stage):
+    from granudep.cli import main
+    assert main(["config", "template", stage]) == 0
+    text = capsys.readouterr().out
+    f = tmp_path / f"{stage}.yaml"
+    f.write_text(text)
+    data = load_yaml(f)
+    assert data and "#" in text
+    assert main(["config", "show", str(f), "--stage", stage]) == 0
+    assert capsys.readouterr().out.count("\n") > 5
+
+
+def test_config_show_resolves_with_units_and_ranges(capsys):
+    from granudep.cli import main
+    assert main(["config", "show", "T22-A70", "--set", "numerics.dx=0.01"]) == 0
+    out = capsys.readouterr().out
+    assert "  dx: 0.01    # [m]; > 0.0 and <= 0.1; initial particle spacing" in out
+    assert "  theta_deg: 22.0    # [deg]; >= 0.0 and < 60.0; slope angle" in out
+    assert main(["config", "show", "1D-A70"]) == 0
+    assert "  n_particles: 1000    # >= 20 and <= 200000" in capsys.readouterr().out
+    assert main(["config", "show", "1D-A70", "--set", "H0=0.05"]) == 2
+    assert "changes the paper case" in capsys.readouterr().err
