@@ -140,3 +140,34 @@ def test_da_cli_sigterm_then_restart_auto(tmp_path):
     got = granudep.load(out)
     for name in ("front_position", "x", "u", "deposit_depth", "x_inf_history"):
         assert np.array_equal(ref[name].values, got[name].values, equal_nan=True), name
+
+
+WRITER = r"""
+import os, signal, sys, threading, time
+import numpy as np, xarray as xr
+from granudep.io import provenance, var, write_netcdf
+ds = xr.Dataset({"x": var(np.random.default_rng(0).random((400, 20000), dtype=np.float32), ("time", "particle"),
+                          "m", "x")}, coords={"time": var(np.arange(400.0), ("time",), "s", "time")})
+provenance(ds, case="big", config_yaml="{}")
+delay = float(sys.argv[2])
+threading.Timer(delay, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+try:
+    write_netcdf(ds, sys.argv[1])
+    time.sleep(1.0)  # the signal, if it came after the write, lands here
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+    sys.exit(130)
+"""
+
+
+@pytest.mark.parametrize("delay", [0.1, 0.5])  # inside the write (without the fix: a hang in 2 of 2)
+def test_ctrl_c_during_a_netcdf_write_does_not_hang(tmp_path, delay):
+    out = tmp_path / "big.nc"
+    env = {**os.environ, "PYTHONPATH": str(Path(granudep.__file__).parents[1])}
+    proc = subprocess.run([sys.executable, "-c", WRITER, str(out), str(delay)], capture_output=True, text=True,
+                          timeout=120, env=env)  # a hang fails here
+    assert proc.returncode in (0, 130), proc.stderr
+    assert "Traceback" not in proc.stderr, proc.stderr
+    assert not list(tmp_path.glob(".*.tmp"))
+    if out.exists():  # complete, never truncated
+        assert granudep.load(out).x.shape == (400, 20000)
