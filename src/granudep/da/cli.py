@@ -42,11 +42,11 @@ def _run(args) -> int:
                  "x_inf_mode": x_inf_mode, "x_inf": args.x_inf, **parse_sets(args.set)}
     deposition = not args.no_deposition
     cfg = resolve(args.case, deposition=deposition, **overrides)  # ConfigError before any work
+    apply_threads(args.threads)
     out = Path(args.output or default_path(cfg, deposition))
     check_output(out)  # a read-only folder or a non-.nc name costs nothing
     ckpt = Path(args.checkpoint) if args.checkpoint else out.with_name(f".{out.stem}.ckpt")
     restart = _restart_file(args, ckpt, checkpoint_identity(cfg))
-    apply_threads(args.threads)
     LOG.info("DA %s (%s deposition) -> %s", cfg.case, "with" if deposition else "without", out)
     try:
         with graceful_stop():

@@ -15,8 +15,8 @@ def _cmd_isph(args) -> int:
     from .solver import IsphBlowUp
     cfg = load_config(args.case, dx=args.dx, t_end=args.t_end, **parse_sets(args.set))
     out = Path(args.output) if args.output else Path("results/isph") / f"{cfg.case}.nc"
-    check_output(out)  # before any work: a read-only folder or a non-.nc name costs nothing
     apply_threads(args.threads)
+    check_output(out)  # before any work: a read-only folder or a non-.nc name costs nothing
     try:
         with graceful_stop():
             run_config(cfg, output=out, progress=args.progress)
