@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-TARGETS = ["results/sections/T22-A70.nc", "results/da/1D-A70_nodeposition.nc", "results/da/1D-A70_deposition.nc"]
+TARGETS = ["results/sections/T22-A70.nc", "results/da/1D-A70_nodeposition.nc"]  # 2D run, monitor, DA
 # a node with fewer CPUs than the profile's 4 per 2D run: without this override sbatch refuses the
 # job ("Requested node configuration is not available") and Snakemake stops with that error
 SMALL_NODE = ["--set-threads", "isph_run=1", "--set-resources", "isph_run:cpus_per_task=1"]
@@ -45,7 +45,8 @@ def test_ci_config_through_the_slurm_profile_equals_the_local_run(tmp_path):
     # the CI profile's config (profiles/ci/config.yaml: configfile config/ci.yaml)
     subprocess.run(smk + ["-j2", *TARGETS, "--configfile", "config/ci.yaml"], cwd=local, check=True,
                    capture_output=True, timeout=1800)
-    run = subprocess.run(smk + ["--profile", "profiles/slurm", *SMALL_NODE, *TARGETS, "--configfile",
+    # targets first: --set-threads, --set-resources and --configfile take several values
+    run = subprocess.run(smk + [*TARGETS, "--profile", "profiles/slurm", *SMALL_NODE, "--configfile",
                                 "config/ci.yaml"], cwd=remote, capture_output=True, text=True, timeout=3600)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
     assert "slurm" in (run.stdout + run.stderr).lower()
