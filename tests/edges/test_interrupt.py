@@ -171,3 +171,23 @@ def test_ctrl_c_during_a_netcdf_write_does_not_hang(tmp_path, delay):
     assert not list(tmp_path.glob(".*.tmp"))
     if out.exists():  # complete, never truncated
         assert granudep.load(out).x.shape == (400, 20000)
+
+
+@pytest.mark.slow
+def test_isph_cli_sigterm_one_line_and_partial_output(tmp_path):
+    out = tmp_path / "T22-A70.nc"
+    env = {**os.environ, "PYTHONPATH": str(Path(granudep.__file__).parents[1])}
+    proc = subprocess.Popen([sys.executable, "-m", "granudep", "isph", "T22-A70", "--dx", "0.01", "--set",
+                             "output.progress_s=1e-9", "-o", str(out)], stderr=subprocess.PIPE, text=True, env=env)
+    lines = []
+    for line in proc.stderr:
+        lines.append(line)
+        if "steps=" in line and len(lines) > 3:
+            proc.send_signal(signal.SIGTERM)
+            break
+    lines += proc.stderr.read().splitlines(True)
+    assert proc.wait() == 128 + signal.SIGTERM
+    errors = [ln for ln in lines if " ERROR " in ln or "Traceback" in ln]
+    assert len(errors) == 1 and "stopped by SIGTERM" in errors[0], errors
+    assert not out.exists() and not list(tmp_path.glob(".*.tmp"))
+    assert granudep.load(tmp_path / "T22-A70.interrupted.nc").attrs["status"].startswith("interrupted")

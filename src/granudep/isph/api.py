@@ -63,8 +63,9 @@ def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any 
             path = interrupted_path(output) if interrupted else output
             write_netcdf(ds, path)
             exc.output = path
-            LOG.error("isph %s %s; partial output (%d snapshots) kept in %s", cfg.case,
-                      "interrupted" if interrupted else "failed", ds.sizes["time"], path)
+            (LOG.info if interrupted else LOG.error)(  # the CLI's one error line says it for a stop
+                "isph %s %s; partial output (%d snapshots) kept in %s", cfg.case,
+                "interrupted" if interrupted else "failed", ds.sizes["time"], path)
         raise
     prog.close()
     ds = build_dataset(cfg, solver, snaps, status, ttr)
