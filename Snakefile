@@ -8,7 +8,12 @@
 #
 # Every rule is a thin call of the `granudep` command line; the physics lives in src/granudep.
 
+import sys
+
 from snakemake.utils import min_version, validate
+
+from granudep.config import ConfigError
+from granudep.workflow_check import check_structure, snakemake_sources
 
 min_version("9.0")
 
@@ -16,7 +21,16 @@ min_version("9.0")
 configfile: "config/config.yaml"
 
 
-validate(config, "workflow/schemas/config.schema.yaml")
+# One validation for the CLI and the workflow: the schema checks the workflow's own structure here;
+# at the end of this file every job's stage config is built with the stages' own validators
+# (workflow/rules/validate.smk). Any refusal is one line naming the file, the key and the range.
+CONFIG_SOURCES = snakemake_sources(workflow)
+try:
+    check_structure(config, "workflow/schemas/config.schema.yaml", CONFIG_SOURCES)
+except ConfigError as _exc:
+    sys.stderr.write(f"granudep: {_exc}\n")
+    sys.exit(2)
+validate(config, "workflow/schemas/config.schema.yaml")  # fills the schema's defaults
 
 
 wildcard_constraints:
@@ -50,3 +64,4 @@ include: "workflow/rules/figures.smk"  # one rule per paper figure
 include: "workflow/rules/summary.smk"  # results/summary.md and benchmark table
 include: "workflow/rules/convergence.smk"  # target `convergence` (not in `all`)
 include: "workflow/rules/sensitivity.smk"  # target `sensitivity` (not in `all`)
+include: "workflow/rules/validate.smk"  # every job's stage config, before any job runs

@@ -12,9 +12,7 @@ from __future__ import annotations
 
 import argparse
 import csv
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 
@@ -61,14 +59,14 @@ def main(argv: list[str] | None = None) -> int:
             stages[r["stage"]] = stages.get(r["stage"], 0.0) + r["wall_s"]
     print("per stage: " + ", ".join(f"{k} {v:.1f} s" for k, v in sorted(stages.items(), key=lambda kv: -kv[1])))
     if args.output:
-        out = Path(args.output)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=out.parent, prefix=out.name, suffix=".tmp")
-        with os.fdopen(fd, "w", newline="") as fh:
-            w = csv.DictWriter(fh, fieldnames=["job", "stage", "wall_s", "max_rss_mb"])
-            w.writeheader()
-            w.writerows(rows)
-        os.replace(tmp, out)
+        import io
+
+        from granudep.io import write_text  # atomic, with the usual permissions (mkstemp alone gave 0600)
+        buf = io.StringIO(newline="")
+        w = csv.DictWriter(buf, fieldnames=["job", "stage", "wall_s", "max_rss_mb"])
+        w.writeheader()
+        w.writerows(rows)
+        write_text(buf.getvalue(), Path(args.output))
     return 0
 
 

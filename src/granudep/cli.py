@@ -16,7 +16,7 @@ from .progress import LOG, setup_logging
 
 #: stage modules providing sub-commands, in the paper's order
 STAGES = ("granudep.da.cli", "granudep.isph.cli", "granudep.monitor.cli", "granudep.regress.cli",
-          "granudep.figures.cli")
+          "granudep.figures.cli", "granudep.config_cli")
 
 
 def _cmd_cases(args) -> int:
@@ -42,7 +42,8 @@ def _cmd_warmup(args) -> int:
 
 def _cmd_verify(args) -> int:
     """Run a stage's analytic verification suite and write the table (CSV) the report reads."""
-    from .io import write_text
+    from .io import check_output, write_text
+    check_output(args.output, suffixes=(".csv",))  # before the suite runs
     module = importlib.import_module(f"granudep.{args.stage}.verification")
     table = module.run_all(quick=args.quick)
     print(table.to_string(index=False))
@@ -53,9 +54,18 @@ def _cmd_verify(args) -> int:
     return 0
 
 
+class _Version(argparse.Action):
+    """``--version``: one unwrapped line with the release and the git commit."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from ._version import commit
+        print(f"granudep {__version__} (commit {commit() or 'unknown: not a git checkout'})")
+        parser.exit(0)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="granudep", description=__doc__.splitlines()[0])
-    parser.add_argument("--version", action="version", version=f"granudep {__version__}")
+    parser.add_argument("--version", action=_Version, nargs=0, help="print the version and the commit, then exit")
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     p = sub.add_parser("cases", help="list the paper's named cases (Tables 1 and 5)")
@@ -95,6 +105,14 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         LOG.error("interrupted")
         return 130
+    except BrokenPipeError:  # `granudep config show X | head`: the reader left; nothing to say
+        import os
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
+    except OSError as exc:  # a disk or permission problem while writing: one line, not a traceback
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        print(f"granudep: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

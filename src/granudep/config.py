@@ -17,12 +17,49 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import types
 import typing
 from pathlib import Path
 from typing import Any, Mapping
 
 import yaml
+
+
+class ConfigLoader(yaml.SafeLoader):
+    """PyYAML's safe loader reading numbers as YAML 1.2 (core schema) does.
+
+    PyYAML follows YAML 1.1, where a float needs a dot and a signed exponent: ``5.0e4`` and ``1e-3``
+    stay strings there and the config was refused ("must be a number (got str '5.0e4')"). This
+    loader adds YAML 1.2's float pattern (digits, an optional dot, an exponent with or without sign)
+    as an implicit resolver; everything else (safe tags only) is unchanged. A resolver on a private
+    subclass needs no new dependency (ruamel.yaml) and never changes PyYAML for other code.
+    """
+
+
+_YAML12_FLOAT = re.compile(r"""^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)
+                            |[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$""", re.X)
+ConfigLoader.yaml_implicit_resolvers = {k: list(v) for k, v in yaml.SafeLoader.yaml_implicit_resolvers.items()}
+ConfigLoader.add_implicit_resolver("tag:yaml.org,2002:float", _YAML12_FLOAT, list("-+0123456789."))
+
+
+def yaml_load(text: str):
+    """Parse YAML text with :class:`ConfigLoader` (safe tags, YAML 1.2 numbers)."""
+    return yaml.load(text, Loader=ConfigLoader)  # noqa: S506 -- ConfigLoader is a SafeLoader
+
+
+def yaml12_numbers(obj: Any) -> Any:
+    """Strings a YAML 1.1 parser left unconverted that YAML 1.2 reads as numbers -> floats.
+
+    For configs parsed by someone else's loader (Snakemake's ``configfile``): ``"5.0e4"`` -> 5.0e4.
+    """
+    if isinstance(obj, dict):
+        return {k: yaml12_numbers(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [yaml12_numbers(v) for v in obj]
+    if isinstance(obj, str) and _YAML12_FLOAT.match(obj) and re.search(r"[eE]", obj):
+        return float(obj)
+    return obj
 
 
 class ConfigError(ValueError):
@@ -187,11 +224,19 @@ def load_yaml(path: str | Path) -> dict:
     if not path.is_file():
         raise ConfigError(f"{path}: config file not found")
     try:
-        data = yaml.safe_load(path.read_text())
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: not a UTF-8 text file (byte {exc.start}: {exc.reason}); "
+                          f"save the YAML as UTF-8") from None
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read ({exc.strerror})") from None
+    try:
+        data = yaml_load(text)
     except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML ({exc})") from None
+        raise ConfigError(f"{path}: not valid YAML ({' '.join(str(exc).split())})") from None
     if data is None:
-        data = {}
+        raise ConfigError(f"{path}: the config file is empty (give at least `case:`; "
+                          f"see `granudep config template STAGE`)")
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: top level must be a mapping of keys")
     return data

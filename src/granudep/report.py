@@ -218,6 +218,12 @@ def section_figures(figures, out_dir: Path | None) -> str:
     return "\n".join(out)
 
 
+def _open(path):
+    """A run or sections file, lazily, in the stages' dimension order and with times in seconds."""
+    from .io import open_dataset
+    return open_dataset(path, load=False)
+
+
 def _study_rows_isph(folder: Path, dx=None) -> pd.DataFrame:
     """One row per 2D run in ``folder``; with ``dx`` (m) only the runs at those resolutions (the
     configured list: a run left over from an earlier list is not a convergence result)."""
@@ -225,7 +231,7 @@ def _study_rows_isph(folder: Path, dx=None) -> pd.DataFrame:
     from .compare import reference_row
     rows = []
     for f in sorted(folder.glob("*.nc")):
-        with xr.open_dataset(f) as ds:
+        with _open(f) as ds:
             if not _selected(float(ds.attrs.get("dx", math.nan)), dx):
                 continue
             status = str(ds.attrs.get("status", ""))
@@ -297,7 +303,7 @@ def section_convergence(folder, dx=None, n_particles=None) -> str:
         out.append("")
     rows = []
     for f in sorted((root / "da").glob("*.nc")) if (root / "da").is_dir() else []:
-        with xr.open_dataset(f) as ds:
+        with _open(f) as ds:
             if not _selected(float(ds.sizes.get("particle", 0)), n_particles):
                 continue
             rows.append({"case": str(ds.attrs.get("case", f.stem.split("_n")[0])),
@@ -384,7 +390,7 @@ def _wm_numbers(folder: Path) -> str:
     import xarray as xr
     parts = []
     for f in sorted(folder.glob("*.nc")):
-        with xr.open_dataset(f) as ds:
+        with _open(f) as ds:
             if "rms_deviation" not in ds:
                 continue
             r = ds["rms_deviation"]
@@ -397,7 +403,7 @@ def _wm_numbers(folder: Path) -> str:
 
 def _late_depth(path: Path, t_s_from: float) -> str:
     import xarray as xr
-    with xr.open_dataset(path) as ds:
+    with _open(path) as ds:
         ts = ds["t_s"].values
         sel = ts > t_s_from
         if not sel.any():
@@ -468,7 +474,7 @@ def caption_numbers(results, convergence_dx=None) -> dict:
         def fig5():
             import xarray as xr
             from .figures.isph2d import failure_plane_angle
-            with xr.open_dataset(run) as ds:
+            with _open(run) as ds:
                 angle, t = failure_plane_angle(ds, 1.0)
                 rest = float(ds["time_to_rest"].values)
                 tc = float(ds.attrs["t_c"])

@@ -6,6 +6,7 @@ import pytest
 import xarray as xr
 
 from granudep.cli import main
+from granudep.io import open_dataset
 from granudep.isph.api import run_isph
 from granudep.isph.solver import IsphBlowUp
 
@@ -19,7 +20,7 @@ def test_short_collapse_writes_the_contract(tmp_path):
     out = tmp_path / "T22-A70.nc"
     rc = main(["isph", "T22-A70", "--dx", "0.01", "--t-end", "0.1", "-o", str(out)])
     assert rc == 0
-    ds = xr.open_dataset(out)
+    ds = open_dataset(out)
     for name in CONTRACT_VARS:
         assert name in ds, name
         assert "units" in ds[name].attrs and "long_name" in ds[name].attrs
@@ -43,7 +44,7 @@ def test_blow_up_raises_with_time_step_position_and_keeps_partial_output(tmp_pat
     out = tmp_path / "escape.nc"
     with pytest.raises(IsphBlowUp, match=r"left the domain at t=.* step \d+: \(x, y\)"):
         run_isph("T22-A70", output=out, dx=0.01, domain_length=0.21, t_end=1.0, **{"geometry.outflow": False})
-    ds = xr.open_dataset(out)
+    ds = open_dataset(out)
     assert ds.attrs["status"].startswith("failed: particle")
     assert ds.sizes["time"] >= 1
     assert math.isnan(float(ds.time_to_rest))
@@ -54,7 +55,7 @@ def test_downstream_outflow_removes_particles_and_is_not_a_blow_up(tmp_path, cap
     out = tmp_path / "outflow.nc"
     with caplog.at_level("WARNING", logger="granudep"):
         ds = run_isph("T22-A70", output=out, dx=0.01, domain_length=0.21, t_end=0.3)
-    ds = xr.open_dataset(out)
+    ds = open_dataset(out)
     assert not ds.attrs["status"].startswith("failed")
     n0 = ds.sizes["particle"]
     assert n0 == 14 * 20 and ds.attrs["n_particles"] == n0

@@ -224,9 +224,9 @@ def test_coefficients_dataset_contract_and_duplicate_refused():
     out = regress([ds1, ds2])
     nc = out["coefficients_nc"]
     check_contract(nc)
-    assert nc.A.dims == ("case",) and nc.A_grid.dims == ("theta_grid", "a_grid")
-    assert float(nc.A_grid.sel(theta_grid=16.0, a_grid=0.5)) == pytest.approx(-0.05, abs=1e-9)
-    assert np.isnan(float(nc.A_grid.sel(theta_grid=16.0, a_grid=0.7)))
+    assert nc.A.dims == ("case",) and nc.A_grid.dims == ("theta_grid", "aspect_ratio_grid")
+    assert float(nc.A_grid.sel(theta_grid=16.0, aspect_ratio_grid=0.5)) == pytest.approx(-0.05, abs=1e-9)
+    assert np.isnan(float(nc.A_grid.sel(theta_grid=16.0, aspect_ratio_grid=0.7)))
     with pytest.raises(ConfigError, match="given more than once"):
         regress([ds1, ds1])
     with pytest.raises(ConfigError, match="sections: file not found"):

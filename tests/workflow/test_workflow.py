@@ -133,21 +133,60 @@ def test_user_case_gets_2d_and_da_runs(workdir, tmp_path):
 
 
 @pytest.mark.parametrize("overlay, key", [
-    ({"isph": {"dx": -0.004}}, "['isph']['dx']"),
-    ({"isph": {"cases": ["T22-A70", "bad case"]}}, "['isph']['cases'][1]"),
-    ({"da": {"cases": ["1D-A70", "T22-A70"]}}, "['da']['cases'][1]"),
-    ({"da": {"ab_source": "guess"}}, "['da']['ab_source']"),
-    ({"user_cases": [{"name": "x", "theta_deg": 20, "L0": 0.2, "H0": 0}]}, "['user_cases'][0]['H0']"),
-    ({"isph": {"dxx": 0.004}}, "dxx"),
+    ({"isph": {"dx": -0.004}}, "isph.dx: isph run 'T10-A35': numerics.dx: must be > 0.0 and <= 0.1 (got -0.004)"),
+    ({"isph": {"cases": ["T22-A70", "bad case"]}}, "isph.cases[1]: must be a 2D ISPH case name"),
+    ({"da": {"cases": ["1D-A70", "T22-A70"]}}, "da.cases[1]: must be a Table 5 DA case name"),
+    ({"da": {"ab_source": "guess"}}, "da.ab_source: must be one of ['paper', 'computed'] (got 'guess')"),
+    ({"user_cases": [{"name": "x", "theta_deg": 20, "L0": 0.2, "H0": 0}]},
+     "user_cases[0].H0: isph run 'x': geometry.H0: must be > 0.0"),
+    ({"isph": {"dxx": 0.004}}, "isph.dxx: unknown key (allowed: cases, dx, dx_per_case, t_end, table5_geometries, threads)"),
 ])
 def test_schema_rejects_bad_config_naming_the_key(workdir, tmp_path, overlay, key):
     path = tmp_path / "bad.yaml"
     path.write_text(yaml.safe_dump(overlay))
     rc, out, jobs = dry_run(workdir, "-j2", "--configfile", str(path))
-    assert rc != 0
-    assert "Failed validating" in out or "validation" in out.lower(), out
-    assert key in out, out
+    assert rc == 2, out
+    assert f"granudep: {path}: {key}" in out, out
     assert not jobs  # nothing scheduled
+
+
+def _refusal_lines(out: str) -> list[str]:
+    return [ln for ln in out.splitlines() if ln.strip() and "is extended by additional config" not in ln]
+
+
+# Issue 14 item 4: each of these passed `snakemake -n` before and was refused only by the job.
+@pytest.mark.parametrize("overlay, expected", [
+    ("isph: {dx: .nan}\n", "isph.dx: must be a finite number (got nan)"),
+    ("user_cases: [{name: steep, theta_deg: 30, L0: 0.2, H0: 0.1}]\n",
+     "user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_deg = 25.5"),
+    ("user_cases: [{name: big, theta_deg: 20, L0: 7, H0: 0.1}]\n",
+     "user_cases[0].L0: isph run 'big': geometry.L0: must be > 0.0 and <= 5.0 (got 7.0)"),
+    ("da: {n_particles: 500000}\n", "da.n_particles: da run '1D-A30_deposition': numerics.n_particles: "
+                                      "must be >= 20 and <= 200000 (got 500000)"),
+    ("user_cases: [{name: a, theta_deg: 20, L0: 0.2, H0: 0.1}, {name: a, theta_deg: 18, L0: 0.2, H0: 0.1}]\n",
+     "user_cases[1].name: 'a' is already the name of user_cases[0]"),
+    ("reference_tables: [measurements/none.csv]\n", "reference_tables[0]: file not found: measurements/none.csv"),
+    ("sensitivity: {critical_speed: [-1.0]}\n", "sensitivity.critical_speed[0]: sensitivity monitor"),
+    ("monitor: {width_factor: 80}\n", "monitor.width_factor: monitor: monitor.width_factor: must be > 0.0 and <= 50.0"),
+    ("convergence: {dx: [0.2, 0.01]}\n", "convergence.dx[0]: convergence isph run dx = 0.2: numerics.dx: must be"),
+])
+def test_dry_run_refuses_what_the_jobs_would_in_one_line(workdir, tmp_path, overlay, expected):
+    path = tmp_path / "bad.yaml"
+    path.write_text(overlay)
+    rc, out, jobs = dry_run(workdir, "-j2", "--configfile", str(path))
+    assert rc == 2, out
+    lines = _refusal_lines(out)
+    assert len(lines) == 1, out
+    assert lines[0].startswith(f"granudep: {path}: {expected}"), out
+    assert not jobs
+
+
+def test_dry_run_reads_yaml_1_2_numbers(workdir, tmp_path):
+    path = tmp_path / "ok.yaml"
+    path.write_text("isph: {dx: 5e-3}\n")
+    rc, out, jobs = dry_run(workdir, "-j2", "results/isph/T22-A70.nc", "--configfile", str(path))
+    assert rc == 0, out
+    assert "--dx 0.005" in out
 
 
 def test_da_case_without_2d_reference_is_refused(workdir, tmp_path):

@@ -1,6 +1,8 @@
 # 1D depth-averaged SPH (Sections 2.3-2.4, 4.3) with and without deposition. A and B come from
 # Table 5 (`da.ab_source: paper`) or from our regression (`computed`); user cases always use the
 # computed table (interpolated in (a, theta); the run refuses outside the table).
+# A run cancelled by SIGTERM (Snakemake, SLURM) writes a checkpoint next to its output
+# (.{case}_{variant}.ckpt); the rerun continues from it (--restart auto), bit-identically.
 
 
 def da_ab_source(case):
@@ -43,4 +45,4 @@ rule da_run:
         mem_mb=2000,
     shell:
         "NUMBA_NUM_THREADS={threads} granudep da {params.source} {params.options}"
-        " --n-particles {params.n_particles} -o {output} > {log} 2>&1"
+        " --n-particles {params.n_particles} --restart auto -o {output} > {log} 2>&1"

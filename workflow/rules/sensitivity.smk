@@ -31,12 +31,27 @@ def sens_isph_run(sens):
 
 
 def sens_override(keys, sens, case):
+    """The run's config: the paper case, or, with a changed material, a run of its own name
+    (a paper case name stands for the paper's geometry and material; the stages refuse it)."""
     param, value = sens_split(sens)
     data = {"case": case}
     if param in keys:
         section, key = keys[param]
-        data[section] = {key: value}
+        data = {"case": f"{case}-{sens}".replace(".", "p"), "geometry": PAPER_GEOMETRY[case], section: {key: value}}
     return data
+
+
+def _paper_geometry(case):
+    if case.startswith("1D-"):
+        from granudep.da.config import case_mapping
+
+        return case_mapping(case)["geometry"]
+    from granudep.isph.config import case_geometry
+
+    return case_geometry(case)
+
+
+PAPER_GEOMETRY = {c: _paper_geometry(c) for c in (SENS["isph_case"], SENS["da_case"])}
 
 
 wildcard_constraints:

@@ -25,7 +25,7 @@ def one_run(coefficients: str, da: str) -> dict:
     if len(coeffs) != 1:
         raise SystemExit(f"{coefficients}: expected one case, found {len(coeffs)} rows")
     row = {"A": float(coeffs["A"].iloc[0]), "B": float(coeffs["B"].iloc[0])}
-    with xr.open_dataset(da) as ds:
+    with xr.open_dataset(da, decode_times=False) as ds:
         for name in ("final_runout_norm", "flow_time"):
             row[name] = float(ds[name].values) if name in ds else float("nan")
     return row

@@ -5,12 +5,14 @@ import math
 
 import xarray as xr
 
-from ..progress import LOG, Progress
+from ..progress import LOG, make_progress
+from .checkpoint import Checkpointer, DAInterrupted
 from .config import DAConfig, resolve
 from .deposition import XInfResult, coefficients, self_consistent
 from .output import to_dataset
 from .physics import earth_pressure_coefficients
-from .solver import AT_REST, RUNNING, Physics, simulate
+from .solver import AT_REST, RUNNING, Physics
+from .solver import simulate as _simulate
 
 
 class DARunError(RuntimeError):
@@ -35,21 +37,62 @@ def _check(rec, cfg, ds_fn):
         LOG.warning("DA %s: %s — flow time undefined; raise numerics.t_end", cfg.case, rec.message)
 
 
-def run_da(case_or_config, deposition: bool = True, **overrides) -> xr.Dataset:
+def run_da(case_or_config, deposition: bool | dict = True, progress=None, checkpoint=None,
+           checkpoint_every: float = 600.0, restart=None, **overrides) -> xr.Dataset:
     """Run a DA case: a Table 5 name (``"1D-A70"``), a YAML path, a mapping or a ``DAConfig``.
 
-    ``deposition`` switches the deposition source term (it overrides ``deposition.enabled``);
+    ``deposition`` switches the deposition source term (it overrides ``deposition.enabled``), or is
+    the ``deposition`` section itself (``deposition={"ab_source": "user", "A": -0.03, "B": 0.04}``:
+    deposition on, unless the mapping says ``enabled: false``);
     ``overrides`` are config sections (``numerics={"cfl": 0.1}``) or unique keys
     (``n_particles=500``, ``x_inf_mode="user"``, ``x_inf=0.9``). Bad input raises ConfigError before
     any work; a run that blows up raises :class:`DARunError` carrying the partial dataset.
+
+    ``progress``: None/"auto" (tqdm bar in a terminal or notebook, log lines otherwise), "log",
+    "bar" or False. ``checkpoint``: a file the run state is written to every ``checkpoint_every``
+    wall seconds and on SIGTERM/SIGINT (inside :func:`granudep.signals.graceful_stop`);
+    ``restart``: such a file to continue from (bit-identical to an uninterrupted run). A stop
+    raises :class:`granudep.da.checkpoint.DAInterrupted` with the partial dataset as ``dataset``.
     """
     cfg = resolve(case_or_config, deposition=deposition, **overrides)
+    deposition = cfg.deposition.enabled
     if cfg.geometry.path is not None:  # a slope profile (issue 16): granudep.da.path_run
         from .path_run import run_path
         return run_path(cfg, deposition)
     ka, kp = _k(cfg)
-    progress = Progress(cfg.output.progress_every_s)
+    ckpt = Checkpointer(checkpoint_identity(cfg), checkpoint, checkpoint_every, restart)
+    progress = make_progress(progress, cfg.output.progress_every_s, total=cfg.numerics.t_end, desc=f"DA {cfg.case}")
+    ckpt.progress = progress
     label = f"{cfg.case} ({'deposition' if deposition else 'no deposition'})"
+
+    def simulate(cfg, phys, label, progress):
+        def run(hook):
+            try:
+                return _simulate(cfg, phys, label, progress, checkpoint=hook)
+            except DAInterrupted as exc:
+                exc.dataset = to_dataset(cfg, exc.record, deposition=phys.deposition, physics=phys,
+                                         A=phys.A if phys.deposition else float("nan"),
+                                         B=phys.B if phys.deposition else float("nan"))
+                exc.dataset.attrs["status"] = f"interrupted: {exc}"
+                raise
+        return ckpt.simulate(f"{label}|{phys!r}", run)
+
+    try:
+        ds = _run(cfg, deposition, ka, kp, label, progress, simulate)
+    finally:
+        progress.close()
+    ckpt.remove()
+    return ds
+
+
+def checkpoint_identity(cfg: DAConfig) -> str:
+    """What a checkpoint must match to be continued: the resolved config and the version."""
+    from .._version import __version__
+    from ..config import to_yaml
+    return f"granudep {__version__}\n{to_yaml(cfg)}"
+
+
+def _run(cfg, deposition, ka, kp, label, progress, simulate) -> xr.Dataset:
     if not deposition:
         phys = Physics(ka, kp, False)
         rec = simulate(cfg, phys, label, progress)

@@ -1,27 +1,64 @@
 """``granudep da``: run a DA case (Table 5 name or YAML) with or without deposition → NetCDF."""
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
+from ..cliutil import add_run_args, apply_threads, interrupted_path, parse_sets
 from ..io import write_netcdf
 from ..progress import LOG
 
 
+def _restart_file(args, ckpt: Path, identity: str) -> Path | None:
+    """--restart FILE, or --restart auto: the default checkpoint when it exists and matches."""
+    if args.restart is None:
+        return None
+    if args.restart != "auto":
+        return Path(args.restart)
+    if not ckpt.is_file():
+        return None
+    from ..config import ConfigError
+    from .checkpoint import Checkpointer
+    try:
+        Checkpointer(identity, restart=ckpt)
+    except ConfigError as exc:
+        LOG.warning("not restarting: %s; starting afresh", exc)
+        return None
+    return ckpt
+
+
 def _run(args) -> int:
-    from .api import DARunError, run_da
+    from ..io import check_output
+    from ..signals import graceful_stop
+    from .api import DARunError, checkpoint_identity, run_da
+    from .checkpoint import DAInterrupted
     from .config import resolve
     from .output import default_path, summary_line
 
+    x_inf_mode = args.x_inf_mode
+    if args.x_inf is not None and x_inf_mode is None:
+        x_inf_mode = "user"  # --x-inf alone means: use this x_inf
     overrides = {"n_particles": args.n_particles, "ab_source": args.ab_source, "coefficients": args.coefficients,
-                 "x_inf_mode": args.x_inf_mode, "x_inf": args.x_inf}
+                 "x_inf_mode": x_inf_mode, "x_inf": args.x_inf, **parse_sets(args.set)}
     deposition = not args.no_deposition
     cfg = resolve(args.case, deposition=deposition, **overrides)  # ConfigError before any work
+    apply_threads(args.threads)
     out = Path(args.output or default_path(cfg, deposition))
+    check_output(out)  # a read-only folder or a non-.nc name costs nothing
+    ckpt = Path(args.checkpoint) if args.checkpoint else out.with_name(f".{out.stem}.ckpt")
+    restart = _restart_file(args, ckpt, checkpoint_identity(cfg))
     LOG.info("DA %s (%s deposition) -> %s", cfg.case, "with" if deposition else "without", out)
     try:
-        ds = run_da(cfg, deposition=deposition)
+        with graceful_stop():
+            ds = run_da(cfg, deposition=deposition, progress=args.progress, checkpoint=ckpt,
+                        checkpoint_every=args.checkpoint_every, restart=restart)
+    except DAInterrupted as exc:
+        part = interrupted_path(out)
+        if getattr(exc, "dataset", None) is not None:
+            write_netcdf(exc.dataset, part)
+        LOG.error("%s; partial output %s, checkpoint %s (continue with --restart %s)", exc, part, exc.checkpoint,
+                  exc.checkpoint)
+        return 128 + int(exc.signum)
     except DARunError as exc:
         LOG.error("%s", exc)
         if exc.dataset is not None:
@@ -73,7 +110,17 @@ def register(subparsers) -> None:
     p.add_argument("--ab-source", choices=["paper", "computed", "user"], help="where A and B of eq 36 come from")
     p.add_argument("--coefficients", metavar="COEFFS.csv", help="coefficients.csv of `granudep regress` (computed)")
     p.add_argument("--x-inf-mode", choices=["self-consistent", "no-deposition", "user"], help="how x_inf in [x] is set")
-    p.add_argument("--x-inf", type=float, metavar="X", help="x_inf in m from the back wall (x-inf-mode user)")
+    p.add_argument("--x-inf", type=float, metavar="X",
+                   help="x_inf in m from the back wall (implies --x-inf-mode user)")
+    p.add_argument("--checkpoint", metavar="FILE", help="checkpoint file (default OUT folder/.{OUT stem}.ckpt)")
+    p.add_argument("--checkpoint-every", type=float, default=600.0, metavar="S",
+                   help="wall seconds between checkpoints (default 600; SIGTERM/SIGINT always write one)")
+    p.add_argument("--restart", metavar="CHECKPOINT|auto",
+                   help="continue an interrupted run from its checkpoint (bit-identical); 'auto': the default "
+                        "checkpoint if it exists and matches the inputs")
+    p.add_argument("--progress", choices=["auto", "log", "bar", "off"], default="log",
+                   help="progress: plain log lines (default), a tqdm bar, auto (bar in a terminal) or off")
+    add_run_args(p, "numerics.cfl=0.3")
     p.set_defaults(func=_run)
     q = subparsers.add_parser(
         "path-figure", help="figure of DA runs on a path profile: bed, release, final deposit, travel angle, envelopes",

@@ -138,6 +138,24 @@ class DAConfig:
             raise ConfigError(
                 f"material.phi_basal_deg: must be <= material.phi_internal_deg = {m.phi_internal_deg} for "
                 f"numerics.earth_pressure 'savage_hutter' (no real k; got {m.phi_basal_deg})")
+        if self.numerics.earth_pressure in ("paper", "savage_hutter") and self.numerics.basal_friction \
+                and g.theta_deg >= m.phi_basal_deg:
+            raise ConfigError(
+                f"geometry.theta_deg: must be < material.phi_basal_deg = {m.phi_basal_deg} (a flow on a slope "
+                f"steeper than the basal friction angle never comes to rest; got {g.theta_deg})")
+        if d.x_inf is not None and d.x_inf_mode != "user":
+            raise ConfigError(f"deposition.x_inf: used only with deposition.x_inf_mode 'user' "
+                              f"(got x_inf = {d.x_inf} with x_inf_mode {d.x_inf_mode!r}; set both)")
+        if self.case in set(table5().case_id):
+            ref = case_mapping(self.case)
+            for sec in ("geometry", "material"):
+                for k, v in ref[sec].items():
+                    got = getattr(getattr(self, sec), k)
+                    if not math.isclose(got, v, rel_tol=1e-9, abs_tol=1e-12):
+                        raise ConfigError(
+                            f"{sec}.{k}: {got} changes the paper case {self.case!r} (Table 5: {v}); a run with "
+                            f"its own geometry or material needs its own name (case: my-{self.case}) and "
+                            f"deposition.ab_source 'computed' or 'user' (Table 5's A, B are for its geometry)")
         if d.enabled and d.ab_source == "paper" and self.case not in set(table5().case_id):
             raise ConfigError(
                 f"deposition.ab_source: 'paper' needs a Table 5 case (one of {', '.join(table5().case_id)}) "
@@ -195,6 +213,9 @@ def overrides_mapping(overrides: Mapping[str, Any]) -> dict:
             out = merge(out, {key: dict(value)})
         elif key == "case":
             out["case"] = value
+        elif "." in key and key.split(".", 1)[0] in SECTIONS:  # numerics.cfl=0.3
+            sec, leaf_key = key.split(".", 1)
+            out = merge(out, {sec: {leaf_key: value}})
         elif key in leaf:
             out = merge(out, {leaf[key]: {key: value}})
         else:
@@ -203,7 +224,7 @@ def overrides_mapping(overrides: Mapping[str, Any]) -> dict:
     return out
 
 
-def resolve(case_or_config: str | Path | Mapping | DAConfig, deposition: bool | None = None,
+def resolve(case_or_config: str | Path | Mapping | DAConfig, deposition: bool | Mapping | None = None,
             **overrides) -> DAConfig:
     """Build the validated ``DAConfig`` from a case name, YAML path or mapping plus overrides."""
     if isinstance(case_or_config, DAConfig):
@@ -224,6 +245,11 @@ def resolve(case_or_config: str | Path | Mapping | DAConfig, deposition: bool | 
     else:
         raise ConfigError(f"case: expected a case name, YAML path or mapping (got {type(case_or_config).__name__})")
     data = merge(base, overrides_mapping(overrides))
-    if deposition is not None:
+    if isinstance(deposition, Mapping):  # run_da(..., deposition={"ab_source": "user", ...}): the section
+        data = merge(data, {"deposition": {"enabled": True, **dict(deposition)}})
+    elif deposition is not None:
+        if not isinstance(deposition, (bool, int)) or isinstance(deposition, float):
+            raise ConfigError(f"deposition: must be true/false or a mapping of deposition keys "
+                              f"(got {type(deposition).__name__} {deposition!r})")
         data = merge(data, {"deposition": {"enabled": bool(deposition)}})
     return build(DAConfig, data)

@@ -90,7 +90,9 @@ def to_dataset(cfg, rec, *, deposition: bool, physics, A=float("nan"), B=float("
         "xsph_delta": num.xsph_delta, "kernel_support": num.kernel_support, "dx_grid": dxg,
         "n_steps": int(rec.n_steps), "at_rest": int(rec.status == 1), "status": rec.message,
     })
-    return provenance(ds, case=cfg.case, config_yaml=to_yaml(cfg))
+    return provenance(ds, case=cfg.case, config_yaml=to_yaml(cfg),
+                      title=f"granudep 1D depth-averaged SPH run {cfg.case} "
+                            f"({'with' if deposition else 'without'} deposition)")
 
 
 def default_path(cfg, deposition: bool) -> str:

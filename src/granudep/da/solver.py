@@ -562,24 +562,29 @@ def _record(rec, cfg, x, F, order, dep, t, L, dt, steps, dxg, ng, thr):
     rec.steps.append(steps)
 
 
-def simulate(cfg, phys: Physics, label: str = "", progress=None, init=None) -> RunRecord:
+def simulate(cfg, phys: Physics, label: str = "", progress=None, init=None, checkpoint=None) -> RunRecord:
     """Run one DA simulation to rest (or t_end) and return its record.
 
     A failure (non-finite state, particle leaving the domain, step limit) stops the run: the record
     keeps every output written so far, with ``status`` and ``message`` saying when, at which step
-    and where.
+    and where. ``checkpoint`` (``da.checkpoint``): its ``resume()`` gives the state to continue
+    from (or None), and ``at_output(state_fn)`` is called after every output time.
     """
-    x, F, order = initial_state(cfg) if init is None else custom_state(*init)
     dxg, ng, edges = _grid(cfg)
-    dep = np.zeros(ng)
     prm = parameter_vector(cfg, phys, ng)
-    rec = RunRecord(x_edges=edges, x_inf=phys.x_inf, A=phys.A, B=phys.B)
     thr = cfg.front_threshold
-    L = smoothing_length(F, prm)
-    _record(rec, cfg, x, F, order, dep, 0.0, L, 0.0, 0, dxg, ng, thr)
-    t, steps = 0.0, 0
     dt_out, t_end = cfg.output.dt_output, cfg.numerics.t_end
-    k = 1
+    state = checkpoint.resume() if checkpoint is not None else None
+    if state is not None:  # continue exactly where the checkpointed run stood after output k - 1
+        x, F, order, dep, rec, t, steps, k = state
+    else:
+        x, F, order = initial_state(cfg) if init is None else custom_state(*init)
+        dep = np.zeros(ng)
+        rec = RunRecord(x_edges=edges, x_inf=phys.x_inf, A=phys.A, B=phys.B)
+        L = smoothing_length(F, prm)
+        _record(rec, cfg, x, F, order, dep, 0.0, L, 0.0, 0, dxg, ng, thr)
+        t, steps = 0.0, 0
+        k = 1
     while True:
         t_target = min(k * dt_out, t_end)
         t, steps, status, where, L, dt = advance(x, F, order, dep, t, t_target, prm, steps)
@@ -606,5 +611,7 @@ def simulate(cfg, phys: Physics, label: str = "", progress=None, init=None) -> R
             rec.status, rec.message = RUNNING, f"not at rest at numerics.t_end = {t_end} s"
             break
         k += 1
+        if checkpoint is not None:
+            checkpoint.at_output(lambda: (x, F, order, dep, rec, t, steps, k))
     rec.n_steps = steps
     return rec

@@ -171,7 +171,7 @@ def kind_of(path) -> str:
         if {"final_runout_norm", "provenance"} <= cols:
             return "reference"
         return "csv"
-    with xr.open_dataset(p) as ds:
+    with xr.open_dataset(p, decode_times=False) as ds:
         dims = set(ds.dims)
         if "width_factor" in dims:
             return "wm"

@@ -6,38 +6,68 @@ from typing import Any
 
 import xarray as xr
 
-from ..io import write_netcdf
-from ..progress import LOG, Progress
+from ..io import check_output, write_netcdf
+from ..progress import LOG, Progress, make_progress
+from ..signals import STOP, RunInterrupted
 from .config import IsphConfig, load_config
 from .output import build_dataset
 from .solver import IsphBlowUp, run
 
 
-def run_isph(case_or_config: Any, output: str | Path | None = None, **overrides) -> xr.Dataset:
+class IsphInterrupted(IsphBlowUp, RunInterrupted):
+    """A run stopped by SIGTERM/SIGINT at an output time (the solver attaches its snapshots)."""
+
+    def __init__(self, message: str, signum: int):
+        IsphBlowUp.__init__(self, message)
+        self.signum = signum
+
+
+def _stop(cfg: IsphConfig):
+    def on_stop():
+        raise IsphInterrupted(f"isph {cfg.case}: stopped by {STOP.name()}", STOP.signum)
+    return on_stop
+
+
+def run_isph(case_or_config: Any, output: str | Path | None = None, progress: Any = None,
+             **overrides) -> xr.Dataset:
     """Run a 2D ISPH case (Table 1 name, T22-A30/A45/A124, YAML path, mapping or IsphConfig).
 
-    ``overrides`` name config fields (``dx=0.008``, ``t_end=1.0``, ``wall.slip="no_slip"``). With
-    ``output`` the dataset is written there (atomically), also when the run blows up: then the
+    ``overrides`` name config fields (``dx=0.008``, ``t_end=1.0``, ``wall.slip="no_slip"``) or
+    whole sections (``numerics={"dx": 0.008}``). With ``output`` the dataset is written there
+    (atomically; the path is checked before the run), also when the run blows up: then the
     snapshots so far are written with ``status = "failed: ..."`` and IsphBlowUp is re-raised.
-    Bad input raises ConfigError before any work.
+    ``progress``: None/"auto" (a tqdm bar in a terminal or notebook, plain log lines otherwise),
+    "log", "bar", False (silent). Bad input raises ConfigError before any work.
     """
     cfg = load_config(case_or_config, **overrides)
-    return run_config(cfg, output=output)
+    if output is not None:
+        check_output(output)
+    return run_config(cfg, output=output, progress=progress)
 
 
-def run_config(cfg: IsphConfig, output: str | Path | None = None) -> xr.Dataset:
+def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any = "log") -> xr.Dataset:
     LOG.info("isph %s: theta=%.1f deg, L0=%.3f m, H0=%.3f m, dx=%.4f m, t_end=%.3f s (%.1f t_c), slip=%s",
              cfg.case, cfg.geometry.theta_deg, cfg.geometry.L0, cfg.geometry.H0, cfg.numerics.dx, cfg.t_end,
              cfg.t_end / cfg.t_c, cfg.wall.slip)
+    prog = make_progress(progress, cfg.output.progress_s, total=cfg.t_end, on_stop=_stop(cfg), desc=f"isph {cfg.case}")
     try:
-        solver, snaps, status, ttr = run(cfg, progress=Progress(cfg.output.progress_s))
+        solver, snaps, status, ttr = run(cfg, on_snapshot=lambda s, snaps: prog.update(s.t), progress=prog)
     except IsphBlowUp as exc:
-        ds = build_dataset(cfg, exc.solver, exc.snapshots, f"failed: {exc}", float("nan"))
+        prog.close()
+        interrupted = isinstance(exc, IsphInterrupted)
+        ds = build_dataset(cfg, exc.solver, exc.snapshots, f"{'interrupted' if interrupted else 'failed'}: {exc}",
+                           float("nan"))
         exc.dataset = ds
         if output is not None:
-            write_netcdf(ds, output)
-            LOG.error("isph %s failed; partial output (%d snapshots) kept in %s", cfg.case, ds.sizes["time"], output)
+            from ..cliutil import interrupted_path
+            path = interrupted_path(output) if interrupted else output
+            write_netcdf(ds, path)
+            exc.output = path
+            (LOG.info if interrupted else LOG.error)(  # the CLI's one error line says it for a stop
+                "isph %s %s; partial output (%d snapshots) kept in %s", cfg.case,
+                "interrupted" if interrupted else "failed", ds.sizes["time"], path)
         raise
+    prog.close()
     ds = build_dataset(cfg, solver, snaps, status, ttr)
     if ds.attrs["n_outflow"]:
         LOG.warning("isph %s: %d particle(s) left through the downstream outflow at x = %.3f m between t=%.3f and "

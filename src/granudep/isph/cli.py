@@ -3,18 +3,27 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..cliutil import add_run_args, apply_threads, parse_sets
+
 
 def _cmd_isph(args) -> int:
-    from .api import run_isph
+    from ..io import check_output
+    from ..progress import LOG
+    from ..signals import graceful_stop
+    from .api import IsphInterrupted, run_config
     from .config import load_config
     from .solver import IsphBlowUp
-    cfg = load_config(args.case, dx=args.dx, t_end=args.t_end)
+    cfg = load_config(args.case, dx=args.dx, t_end=args.t_end, **parse_sets(args.set))
     out = Path(args.output) if args.output else Path("results/isph") / f"{cfg.case}.nc"
-    from .api import run_config
+    apply_threads(args.threads)
+    check_output(out)  # before any work: a read-only folder or a non-.nc name costs nothing
     try:
-        run_config(cfg, output=out)
+        with graceful_stop():
+            run_config(cfg, output=out, progress=args.progress)
+    except IsphInterrupted as exc:
+        LOG.error("%s at t = %.4f s; partial output in %s", exc, exc.solver.t, getattr(exc, "output", "-"))
+        return 128 + int(exc.signum)
     except IsphBlowUp as exc:
-        from ..progress import LOG
         LOG.error("%s", exc)
         return 1
     print(out)
@@ -22,8 +31,10 @@ def _cmd_isph(args) -> int:
 
 
 def _cmd_vtk(args) -> int:
+    from ..io import check_output_dir
     from .vtk import export_vtk
-    pvd = export_vtk(args.run, args.output)
+    check_output_dir(args.output)
+    pvd = export_vtk(args.run, args.output, encoding=args.encoding)
     print(pvd)
     return 0
 
@@ -33,9 +44,14 @@ def register(sub) -> None:
     p.add_argument("case", help="case name (e.g. T22-A70) or CONFIG.yaml")
     p.add_argument("--dx", type=float, default=None, help="initial particle spacing [m] (default 0.004)")
     p.add_argument("--t-end", type=float, default=None, help="end time [s] (default 30 t_c; stops earlier at rest)")
-    p.add_argument("-o", "--output", default=None, help="output NetCDF (default results/isph/{case}.nc)")
+    p.add_argument("-o", "--output", default=None, help="output NetCDF (.nc; default results/isph/{case}.nc)")
+    p.add_argument("--progress", choices=["auto", "log", "bar", "off"], default="log",
+                   help="progress: plain log lines (default), a tqdm bar, auto (bar in a terminal) or off")
+    add_run_args(p, "numerics.cfl=0.1")
     p.set_defaults(func=_cmd_isph)
     p = sub.add_parser("isph-vtk", help="export a 2D ISPH run to ParaView (.vtp per snapshot + .pvd)")
     p.add_argument("run", help="ISPH NetCDF file")
     p.add_argument("-o", "--output", required=True, help="output folder")
+    p.add_argument("--encoding", choices=["binary", "ascii"], default="binary",
+                   help="VTK data arrays: base64 binary (default; ~6x smaller) or ASCII")
     p.set_defaults(func=_cmd_vtk)

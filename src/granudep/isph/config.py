@@ -186,6 +186,17 @@ class IsphConfig:
     def validate(self, prefix: str) -> None:
         check_case_name(self.case)
         g, n = self.geometry, self.numerics
+        _check_paper_identity(self)
+        if g.periodic_length == 0:
+            # a column on a bed comes to rest only if the slope is below the friction angles
+            limits = [(self.material.phi_deg, "material.phi_deg")]
+            if self.wall.slip == "coulomb":
+                limits.append((self.wall.phi_wall_deg, "wall.phi_wall_deg"))
+            phi, key = min(limits)
+            if g.theta_deg >= phi:
+                raise ConfigError(f"geometry.theta_deg: must be < {key} = {phi} for a column on a bed "
+                                  f"(no rest is possible on a slope steeper than the friction angle; "
+                                  f"got {g.theta_deg})")
         if g.L0 < 2 * n.dx or g.H0 < 2 * n.dx:
             raise ConfigError(f"numerics.dx: must be <= min(L0, H0)/2 = {min(g.L0, g.H0) / 2} (got {n.dx})")
         npart = (g.L0 / n.dx) * (g.H0 / n.dx)
@@ -261,6 +272,25 @@ def case_geometry(name: str) -> dict:
     raise ConfigError(f"case: unknown case {name!r} (allowed: {', '.join(case_names())}, or a YAML file)")
 
 
+def _check_paper_identity(cfg: "IsphConfig") -> None:
+    """A paper case name stands for the paper's geometry and material: a run that changes either
+    must carry its own name (it would be written to results/isph/{case}.nc labelled as the paper's)."""
+    if cfg.case not in case_names():
+        return
+    ref_geo = case_geometry(cfg.case)
+    changed = [(f"geometry.{k}", getattr(cfg.geometry, k), v) for k, v in ref_geo.items()
+               if not math.isclose(getattr(cfg.geometry, k), v, rel_tol=1e-9, abs_tol=1e-12)]
+    for sec, obj, ref in (("material", cfg.material, Material()), ("wall", cfg.wall, Wall())):
+        keys = [f.name for f in dataclasses.fields(ref)] if sec == "material" else ["phi_wall_deg"]
+        changed += [(f"{sec}.{k}", getattr(obj, k), getattr(ref, k)) for k in keys
+                    if getattr(obj, k) != getattr(ref, k)]
+    if changed:
+        key, got, ref = changed[0]
+        raise ConfigError(f"{key}: {got} changes the paper case {cfg.case!r} (its value: {ref}); a run with its "
+                          f"own geometry or material needs its own name (case: my-{cfg.case}, "
+                          f"letters, digits, '_' and '-')")
+
+
 def _field_index() -> dict[str, list[str]]:
     idx: dict[str, list[str]] = {}
     for sec in dataclasses.fields(IsphConfig):
@@ -277,14 +307,21 @@ def _field_index() -> dict[str, list[str]]:
 def _apply_overrides(data: dict, overrides: Mapping[str, Any]) -> dict:
     idx = _field_index()
     out = dict(data)
+    sections = {f.name for f in dataclasses.fields(IsphConfig)} - {"case"}
     for key, value in overrides.items():
         if value is None:
+            continue
+        if key in sections:  # a whole section: run_isph(..., numerics={"dx": 0.01})
+            if not isinstance(value, Mapping):
+                raise ConfigError(f"{key}: must be a mapping of {key} keys (got {type(value).__name__} {value!r})")
+            out = merge(out, {key: dict(value)})
             continue
         dotted = key if "." in key else None
         if dotted is None:
             where = idx.get(key)
             if not where:
-                raise ConfigError(f"{key}: unknown override (allowed: {', '.join(sorted(idx))} or section.key)")
+                raise ConfigError(f"{key}: unknown override (allowed: a section {sorted(sections)}, "
+                                  f"section.key or a unique key such as dx, t_end, theta_deg)")
             if len(where) > 1:
                 raise ConfigError(f"{key}: ambiguous override (use one of {', '.join(where)})")
             dotted = where[0]

@@ -26,11 +26,14 @@ REQUIRED_ATTRS = ("theta_deg", "L0", "H0", "dx", "smoothing_length", "particle_v
 
 def _load(run) -> xr.Dataset:
     if isinstance(run, xr.Dataset):
+        if "time" in run.variables and np.issubdtype(run["time"].dtype, np.datetime64):
+            raise ConfigError("run.time: decoded as dates; open the run with granudep.load(path) (or "
+                              "xarray.open_dataset(path, decode_times=False)): times are seconds since release")
         return run
     path = Path(run)
     if not path.is_file():
         raise ConfigError(f"run: file not found: {path}")
-    return open_dataset(path)
+    return open_dataset(path, what="run")
 
 
 def _config(overrides: dict) -> MonitorConfig:
@@ -63,6 +66,12 @@ def _geometry(run: xr.Dataset, cfg: MonitorConfig) -> dict:
         raise ConfigError("run.final_front_position: missing; give monitor.x_inf (m from the back wall)")
     if not (math.isfinite(x_inf) and x_inf > g["L0"]):
         raise ConfigError(f"x_inf: must be > L0 = {g['L0']} m (got {x_inf!r}); the sections span [L0, x_inf]")
+    bed_end = float(run.attrs["domain_length"]) if "domain_length" in run.attrs else \
+        float(np.nanmax(np.asarray(run["x"].values, float)))
+    if cfg.x_inf is not None and x_inf > bed_end:
+        raise ConfigError(f"x_inf: must be <= {bed_end:.6g} m, the end of the run's bed"
+                          f"{'' if 'domain_length' in run.attrs else ' (its farthest particle)'}; the sections "
+                          f"span [L0, x_inf] (got {x_inf!r})")
     time_to_rest = float(run["time_to_rest"]) if "time_to_rest" in run.variables else math.nan
     status = str(run.attrs.get("status", ""))
     # the deposition record is complete once the run rested, or once every particle is deposited
@@ -180,7 +189,8 @@ def monitor(run, **overrides) -> xr.Dataset:
     ds = _base_dataset(run, cfg, g, w)
     for name, (units, long_name) in _VARS.items():
         ds[name] = var(q[name], ("section", "time"), units, long_name)
-    provenance(ds, case=_case(run), config_yaml=to_yaml(cfg))
+    provenance(ds, case=_case(run), config_yaml=to_yaml(cfg),
+               title=f"granudep monitoring sections (eqs 15-17) of 2D run {_case(run)}")
     return ds
 
 
@@ -229,7 +239,8 @@ def monitor_wm(run, **overrides) -> xr.Dataset:
     ds["n_rms"] = var(n.astype(np.int32), ("width_factor", "section"), "1",
                       "number of samples in the RMS deviation")
     ds.attrs["wm_reference"] = cfg.wm_reference
-    provenance(ds, case=_case(run), config_yaml=to_yaml(cfg))
+    provenance(ds, case=_case(run), config_yaml=to_yaml(cfg),
+               title=f"granudep section-width sensitivity (Appendix) of 2D run {_case(run)}")
     return ds
 
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..cliutil import add_run_args, apply_threads, parse_sets
 from ..io import write_netcdf
 from ..progress import LOG
 
@@ -16,17 +17,32 @@ def _common(p) -> None:
     p.add_argument("--x-inf", type=float, default=None, metavar="X",
                    help="final runout x_inf in m from the back wall (default: the run's final_front_position)")
     p.add_argument("--n-sections", type=int, default=None, metavar="N", help="number of sections (default 11)")
+    add_run_args(p, "bed_mirror=false")
 
 
 def _overrides(args) -> dict:
+    sets = {k.removeprefix("monitor."): v for k, v in parse_sets(args.set).items()}
     return {"critical_speed": args.critical_speed, "interface_threshold": args.interface_threshold,
-            "x_inf": args.x_inf, "n_sections": args.n_sections}
+            "x_inf": args.x_inf, "n_sections": args.n_sections, **sets}
+
+
+def _prepare(args, default_dir: str, overrides: dict):
+    """Config, input and output checked before any work; returns (run dataset, output path)."""
+    from ..io import check_output, open_dataset
+    from .api import _config
+    _config(overrides)  # bad keys and ranges first
+    run = open_dataset(args.run, what="run")
+    out = Path(args.output or f"{default_dir}/{run.attrs.get('case', Path(args.run).stem)}.nc")
+    check_output(out)
+    apply_threads(args.threads)
+    return run, out
 
 
 def _cmd_monitor(args) -> int:
     from .api import monitor
-    ds = monitor(args.run, width_factor=args.width_factor, **_overrides(args))
-    out = Path(args.output or f"results/sections/{ds.attrs['case']}.nc")
+    over = {"width_factor": args.width_factor, **_overrides(args)}
+    run, out = _prepare(args, "results/sections", over)
+    ds = monitor(run, **over)
     write_netcdf(ds, out)
     src = ds.interface_source.values
     LOG.info("monitor %s: %d sections x %d times, W_M = %g dx, x_inf = %.4f m; interface from eq 16 in %d, "
@@ -41,8 +57,8 @@ def _cmd_monitor_wm(args) -> int:
     over = _overrides(args)
     if args.widths:
         over["wm_factors"] = args.widths
-    ds = monitor_wm(args.run, **over)
-    out = Path(args.output or f"results/wm/{ds.attrs['case']}.nc")
+    run, out = _prepare(args, "results/wm", over)
+    ds = monitor_wm(run, **over)
     write_netcdf(ds, out)
     table = ds.rms_deviation.to_pandas()
     table.columns = [f"{v:.2f}" for v in ds.x_norm.values]

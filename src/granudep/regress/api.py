@@ -25,7 +25,7 @@ def _load(item) -> tuple[xr.Dataset, str]:
     path = Path(item)
     if not path.is_file():
         raise ConfigError(f"sections: file not found: {path}")
-    return open_dataset(path), str(path)
+    return open_dataset(path, what="sections"), str(path)
 
 
 def regress(sections, **overrides) -> dict:
@@ -47,7 +47,8 @@ def regress(sections, **overrides) -> dict:
     coeffs = coefficient_table(critical, cfg)
     nc = coefficients_dataset(coeffs)
     cfg_text = yaml.safe_dump({"regress": to_dict(cfg), "inputs": [src for _, src in loaded]}, sort_keys=False)
-    provenance(nc, case="regression", config_yaml=cfg_text)
+    provenance(nc, case="regression", config_yaml=cfg_text,
+               title="granudep critical depth-averaged momentum coefficients A, B (eq 36)")
     return {"critical": critical, "coefficients": coeffs, "coefficients_nc": nc,
             "table3": table3_comparison(critical), "table5": table5_comparison(coeffs), "config": cfg}
 

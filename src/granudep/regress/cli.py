@@ -3,13 +3,17 @@ from __future__ import annotations
 
 import pandas as pd
 
+from ..cliutil import parse_sets
 from ..progress import LOG
 
 
 def _cmd_regress(args) -> int:
+    from ..io import check_output_dir
     from .api import regress, write_outputs
-    result = regress(args.sections, onset_depth_factor=args.onset_depth_factor,
-                     fit_x_min=args.fit_x_min, fit_x_max=args.fit_x_max)
+    check_output_dir(args.output)  # before any work
+    over = {"onset_depth_factor": args.onset_depth_factor, "fit_x_min": args.fit_x_min, "fit_x_max": args.fit_x_max,
+            **{k.removeprefix("regress."): v for k, v in parse_sets(args.set).items()}}
+    result = regress(args.sections, **over)
     paths = write_outputs(result, args.output)
     with pd.option_context("display.width", 200, "display.max_columns", 30, "display.max_rows", 200):
         c = result["coefficients"]
@@ -42,4 +46,6 @@ def register(sub) -> None:
                    help="onset when h_D crosses F x dx for the last time (default 0.5)")
     p.add_argument("--fit-x-min", type=float, default=None, help="lowest [x] in the A/B fit (default 0)")
     p.add_argument("--fit-x-max", type=float, default=None, help="highest [x] in the A/B fit (default 1)")
+    p.add_argument("--set", dest="set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override one regression setting (repeatable), e.g. min_sections=4")
     p.set_defaults(func=_cmd_regress)

@@ -58,7 +58,7 @@ def coefficients_dataset(coeffs: pd.DataFrame) -> xr.Dataset:
     n = len(coeffs)
     ds = xr.Dataset(coords={"case": var(np.asarray(coeffs.case, dtype=str), ("case",), "1", "2D run (case name)")})
     for name, units, long_name in (
-            ("theta_deg", "degree", "slope angle theta"), ("a", "1", "initial aspect ratio a = H0/L0"),
+            ("theta_deg", "degree", "slope angle theta"), ("aspect_ratio", "1", "initial aspect ratio a = H0/L0"),
             ("L0", "m", "initial column length L0"), ("H0", "m", "initial column height H0"),
             ("A", "1", "slope A of (hu)_C/p0 = A [x] + B (eq 36)"),
             ("B", "1", "intercept B of (hu)_C/p0 = A [x] + B (eq 36)"),
@@ -66,20 +66,21 @@ def coefficients_dataset(coeffs: pd.DataFrame) -> xr.Dataset:
             ("n_sections", "1", "number of sections in the eq-36 fit"),
             ("p0", "m2 s-1", "momentum scale p0 = H0 sqrt(g H0 cos theta)")):
         dtype = np.int32 if name == "n_sections" else float
-        ds[name] = var(np.asarray(coeffs[name], dtype=dtype).reshape(n), ("case",), units, long_name)
+        col = "a" if name == "aspect_ratio" else name  # 'a' and 'A' may not differ only by case (CF 2.3)
+        ds[name] = var(np.asarray(coeffs[col], dtype=dtype).reshape(n), ("case",), units, long_name)
     grid = coeffs[np.isfinite(coeffs.A) & np.isfinite(coeffs.B)].groupby(["theta_deg", "a"])[["A", "B", "r2"]].mean()
     thetas = np.unique(coeffs.theta_deg.astype(float))
     aspects = np.unique(coeffs.a.astype(float))
     ds = ds.assign_coords(
         theta_grid=var(thetas, ("theta_grid",), "degree", "slope angle of the coefficient grid"),
-        a_grid=var(aspects, ("a_grid",), "1", "initial aspect ratio of the coefficient grid"))
+        aspect_ratio_grid=var(aspects, ("aspect_ratio_grid",), "1", "initial aspect ratio of the coefficient grid"))
     for name, long_name in (("A", "A on the (theta, a) grid (NaN: no case)"),
                             ("B", "B on the (theta, a) grid (NaN: no case)"),
                             ("r2", "R^2 on the (theta, a) grid (NaN: no case)")):
         arr = np.full((thetas.size, aspects.size), np.nan)
         for (th, a), row in grid.iterrows():
             arr[np.searchsorted(thetas, th), np.searchsorted(aspects, a)] = row[name]
-        ds[f"{name}_grid"] = var(arr, ("theta_grid", "a_grid"), "1", long_name)
+        ds[f"{name}_grid"] = var(arr, ("theta_grid", "aspect_ratio_grid"), "1", long_name)
     return ds
 
 
