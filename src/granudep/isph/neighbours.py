@@ -8,7 +8,7 @@ distance ``r``. With ``period > 0`` the domain is periodic in x on [0, period) (
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 
 @njit(cache=True)
@@ -47,7 +47,7 @@ def _minimum_image(ddx, period, half):
     return ddx
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def build_neighbours(x, y, nf, radius, period):
     """Neighbours within ``radius`` of each of the first ``nf`` particles (self excluded).
 
@@ -70,7 +70,7 @@ def build_neighbours(x, y, nf, radius, period):
     # positions in cell order: the candidates of a column of three cells are then one contiguous run
     xs = np.empty(n)
     ys = np.empty(n)
-    for s in range(n):
+    for s in prange(n):
         xs[s] = x[order[s]]
         ys[s] = y[order[s]]
     r2max = radius * radius
@@ -82,9 +82,11 @@ def build_neighbours(x, y, nf, radius, period):
     for c in range(ncx * ncy):
         width = max(width, counts[c + 1] - counts[c])
     width *= 9
+    # the rows are independent (parallel over particles, each writes its own row of ``buf`` and its
+    # count); the offsets ``start`` are the serial prefix sum of the counts, then the rows are copied
     start = np.zeros(nf + 1, np.int64)
     buf = np.empty(nf * width, np.int32)
-    for i in range(nf):
+    for i in prange(nf):
         ci = cid[i] // ncy
         cj = cid[i] % ncy
         xi = x[i]
@@ -110,13 +112,15 @@ def build_neighbours(x, y, nf, radius, period):
                     if j != i:
                         buf[base + cnt] = j
                         cnt += 1
-        start[i + 1] = start[i] + cnt
+        start[i + 1] = cnt
+    for i in range(nf):
+        start[i + 1] += start[i]
     m = start[nf]
     nbr = np.empty(m, np.int64)
     rx = np.empty(m)
     ry = np.empty(m)
     rr = np.empty(m)
-    for i in range(nf):
+    for i in prange(nf):
         k = start[i]
         for c in range(start[i + 1] - start[i]):
             j = buf[i * width + c]
