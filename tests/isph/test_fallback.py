@@ -150,3 +150,24 @@ def test_singular_direct_solve_is_a_blow_up_not_a_crash():
     with pytest.raises(IsphBlowUp, match="direct solver failed"):
         s._solve_cg(indptr, indices, data, np.array([1.0, 0.0]), np.zeros(2), "ppe", dic=True)
     assert s.stats.fallbacks == 1
+
+
+def test_amg_pressure_solver_runs_and_agrees_with_cg_dic():
+    """numerics.pressure_solver amg_sa / amg_rs (pyamg): a short collapse without fallbacks, pressure
+    within the round-off spread of the default at t = 0.02 s (the trajectories differ at solver
+    tolerance, see docs/paper-notes.md "Linear solvers")."""
+    pytest.importorskip("pyamg")
+    ref = run_isph("T22-A70", dx=0.01, t_end=0.02)
+    for m in ("amg_sa", "amg_rs"):
+        ds = run_isph("T22-A70", dx=0.01, t_end=0.02, **{"numerics.pressure_solver": m})
+        assert ds.attrs["linear_solver_fallbacks"] == 0 and ds.attrs["ppe_iterations"] > 0
+        assert ds.attrs["ppe_iterations"] < ref.attrs["ppe_iterations"]  # fewer (but costlier) iterations
+        p, q = ds.pressure.values[-1], ref.pressure.values[-1]
+        assert np.abs(p - q).max() < 1e-3 * np.abs(q).max()
+
+
+def test_amg_without_pyamg_is_a_clear_error(monkeypatch):
+    from granudep.isph import amg
+    monkeypatch.setattr(amg, "have_pyamg", lambda: False)
+    with pytest.raises(ImportError, match="pyamg"):
+        IsphSolver(load_config("T22-A70", dx=0.01, **{"numerics.pressure_solver": "amg_sa"}))

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 BREAKDOWN = -2
 NONFINITE = -3
@@ -702,3 +702,30 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
             its[s] = maxiter
             infos[s] = maxiter
     return out[0], its[0], infos[0], out[1], its[1], infos[1]
+
+
+@njit(cache=True, parallel=True)
+def pcg_dic_two(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
+    """The u and v viscous systems of :func:`pcg_dic_pair` as two independent :func:`pcg_dic` solves,
+    one per thread (prange over the two systems): the same results bit for bit as the pair (each
+    side of the pair is its own pcg_dic, see its doc) on any number of threads, in about half the
+    time on two. Returns (x_u, iterations_u, info_u, x_v, iterations_v, info_v)."""
+    n = bu.size
+    for i in range(n):
+        if indices[indptr[i]] != i:
+            raise ValueError("pcg_dic_two: the diagonal must be the first entry of each row")
+    data_v = data.copy()
+    for i in range(n):
+        data_v[indptr[i]] = diag_v[i]
+    xs = np.empty((2, n))
+    its = np.zeros(2, np.int64)
+    infos = np.zeros(2, np.int64)
+    for s in prange(2):
+        if s == 0:
+            x, it, info = pcg_dic(indptr, indices, data, bu, xu0, rtol, atol, maxiter, mic)
+        else:
+            x, it, info = pcg_dic(indptr, indices, data_v, bv, xv0, rtol, atol, maxiter, mic)
+        xs[s, :] = x
+        its[s] = it
+        infos[s] = info
+    return xs[0].copy(), its[0], infos[0], xs[1].copy(), its[1], infos[1]

@@ -83,6 +83,11 @@ class IsphSolver:
     def __init__(self, cfg: IsphConfig, particles: Particles | None = None):
         self.cfg = cfg
         c = cfg
+        if c.numerics.pressure_solver.startswith("amg_"):
+            from .amg import have_pyamg
+            if not have_pyamg():
+                raise ImportError(f"numerics.pressure_solver: {c.numerics.pressure_solver} needs the optional "
+                                  "package pyamg (pip install pyamg, or the [amg] extra)")
         self.parts = particles if particles is not None else build_particles(cfg)
         P = self.parts
         self.nf = P.nf
@@ -294,6 +299,8 @@ class IsphSolver:
     def _solve_ppe(self, indptr, indices, data, rhs, guess):
         if self.cfg.numerics.pressure_solver == "direct":
             return self._direct(indptr, indices, data, rhs, "ppe")
+        if self.cfg.numerics.pressure_solver.startswith("amg_"):
+            return self._solve_amg(indptr, indices, data, rhs, guess)
         return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
                               dic=self.cfg.numerics.pressure_solver == "cg_dic")
 
@@ -327,6 +334,21 @@ class IsphSolver:
         if not np.isfinite(sol).all():
             return "returned a non-finite solution"
         return None
+
+    def _solve_amg(self, indptr, indices, data, rhs, guess):
+        """AMG-preconditioned CG (:mod:`.amg`, pyamg), with the direct fallback of :meth:`_solve_cg`."""
+        from .amg import amg_pcg
+        try:
+            sol, it, info = amg_pcg(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 200,
+                                    self.cfg.numerics.pressure_solver[4:])
+        except (ArithmeticError, ValueError, RuntimeError) as exc:
+            sol, it, info = guess, 0, BREAKDOWN
+            LOG.warning("isph %s: ppe AMG raised %r", self.cfg.case, exc)
+        self.stats.ppe_iters += it
+        why = self._why(info, sol)
+        if why is not None:
+            return self._fallback(indptr, indices, data, rhs, "ppe", why)
+        return sol
 
     def _solve_cg(self, indptr, indices, data, rhs, guess, kind, dic=False):
         """Jacobi-preconditioned CG (numba, :mod:`.linsolve`: scipy's cg iteration bit for bit) or
