@@ -25,6 +25,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..kernels import wendland_dwdr, wendland_w
+from .neighbours import PARALLEL
 
 SLIP_NO, SLIP_NAVIER, SLIP_FREE, SLIP_COULOMB = 0, 1, 2, 3
 SLIP_CODES = {"no_slip": SLIP_NO, "navier": SLIP_NAVIER, "free_slip": SLIP_FREE, "coulomb": SLIP_COULOMB}
@@ -57,7 +58,7 @@ def wall_beta(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
     return min(1.5, wall_beta_linear(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx))
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def pair_kernel(rr, h):
     """W(r_ij) and (dW/dr)/r (:func:`_gw`) of every pair of the neighbour list, once per step for
     all the kernels below (each evaluated them again: 0.13 ms per kernel and step at 75k pairs).
@@ -102,7 +103,7 @@ def pair_viscosity(ei, ej, gi, gj, mean):
     return 0.5 * (ei + ej)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol):
     """∇·r (free-surface detector, Lee et al. 2008), concentration C = Σ V W (self included),
     ∇C (shifting, normals) and the inverse renormalisation matrix L (Bonet & Lok 1999)."""
@@ -153,7 +154,7 @@ def geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol):
     return divr, conc, gcx, gcy, lmat, (m_xx, m_yy)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, lmat, p, eta,
                       wnx, wny, wc, slip, slip_length, mu_wall, dx, gx, gy, rho, eta_max, wall_ns, wall_k):
     """Renormalised ∇u (rows: du/dx, du/dy, dv/dx, dv/dy); wall neighbours carry the extrapolated
@@ -202,7 +203,7 @@ def velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, lmat, 
     return grad
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
     """η = μ(I) p / |γ̇| capped to [eta_min, eta_max] (eqs 4–5); returns η and |γ̇|.
 
@@ -231,7 +232,7 @@ def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
     return eta, gdot
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, p, eta, gdot, wnx, wny, wc,
                      slip, slip_length, mu_wall, dx, dt, rho, eps2, mean, gx, gy, eta_max, lap_norm, wall_ns,
                      wall_k):
@@ -290,7 +291,7 @@ def assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, p, eta,
     return indptr, indices, data, diag_v
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def wall_contact(start, nbr, nf, x, y, planes, dx, h, cover):
     """Per particle and wall plane (n, c): distance d = n·x − c if the particle is the first layer
     over that wall (d < 2h and no granular particle between it and the wall, i.e. none with
@@ -340,7 +341,7 @@ def wall_contact(start, nbr, nf, x, y, planes, dx, h, cover):
     return dist, col
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def detached_from_walls(contact, limit):
     """Particles whose nearest wall contact (:func:`wall_contact`) is finite but farther than
     ``limit`` (numpy's min over the short axis of ``contact`` cost 0.12 ms per call)."""
@@ -354,7 +355,7 @@ def detached_from_walls(contact, limit):
     return out
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def lmat_pressure(lmat, fs, mxx, myy):
     """Renormalisation of the pressure gradient: ``lmat``, except on free-surface particles,
     where only the diagonal is renormalised (1/M_xx, 1/M_yy where both > 0.4, else none)."""
@@ -372,7 +373,7 @@ def lmat_pressure(lmat, fs, mxx, myy):
     return out
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def contact_length(start, nbr, nf, x, y, contact, planes, dx):
     """Wall length carried by each contact particle (Voronoi cell along the wall): half the distance
     to the nearest contact particle of the same wall on either side (dx/2 on a side without one
@@ -405,7 +406,7 @@ def contact_length(start, nbr, nf, x, y, contact, planes, dx):
     return length
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, dx, dt, u_eps, diag_u, diag_v,
                       length):
     """Coulomb wall friction as an implicit drag on the first particle layer (slip = coulomb).
@@ -444,7 +445,7 @@ def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, d
             diag_v[i] += dt * kd * nx * nx
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, u, v, lmat):
     """∇·u_i = tr(L_i Σ_j V (u_j − u_i) ⊗ ∇_i W_ij) over granular neighbours (walls enter through
     the pressure Neumann condition, not here). With the renormalisation L (identity where the
@@ -473,7 +474,7 @@ def divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, u, v, lmat):
     return div
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_dir, div, us, vs, conc, c0,
                  relax, wnx, wny, dt, rho, eps2, a_full, lap_norm):
     """PPE Σ_j a_ij (p_i − p_j) = −(ρ/Δt) ∇·u* − γ ρ/Δt² min(1 − C_i/C0, 0) over the unknown
@@ -538,7 +539,7 @@ def assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_d
     return indptr, indices, data, rhs
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, p, us, vs, lmat, wnx, wny, dt, rho, detached):
     """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure.
 
@@ -589,7 +590,7 @@ def wall_pressure_at_base(start, nbr, rx, ry, rr, nf, p, us, vs, wnx, wny, dt, r
     return out
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def smoothed_gradient(start, nbr, wk, nf, h, vol, gx, gy):
     """Kernel (Shepard) average of a granular particle field's gradient over each support: the
     surface normal of the shifting. The raw ∇C of a free-surface particle points at the nearest
@@ -615,7 +616,7 @@ def smoothed_gradient(start, nbr, wk, nf, h, vol, gx, gy):
     return sx, sy
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def surface_band(start, nbr, wk, nf, fs, h, r_ref):
     """Weight α ∈ [0, 1] of the bed-normal part of the shift that is removed (Lind et al. 2012):
     1 on free-surface particles, Σ_{j free-surface} W_ij / W(r_ref) (at most 1) below them. Below the
@@ -640,7 +641,7 @@ def surface_band(start, nbr, wk, nf, fs, h, r_ref):
     return alpha
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def shifting(nf, gcx, gcy, u, v, alpha, h, dt, coeff, dx, ncx, ncy):
     """Fickian particle shifting δr = −A h |u| Δt ∇C (Skillen et al. 2013; Lind et al. 2012);
     the fraction ``alpha`` of the part normal to the free surface is removed (1 on free-surface
@@ -676,7 +677,7 @@ def shifting(nf, gcx, gcy, u, v, alpha, h, dt, coeff, dx, ncx, ncy):
     return sx, sy
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def clamp_to_walls(nf, x, y, u, v, planes, dmin, lo, hi):
     """Safeguard against wall penetration: a particle closer than ``dmin`` to a wall plane (within
     the wall's extent [lo, hi] along it) is put back at ``dmin`` and loses its velocity into the
