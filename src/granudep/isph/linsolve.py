@@ -37,6 +37,45 @@ BREAKDOWN = -2
 NONFINITE = -3
 
 
+# OpenBLAS (scipy's, which numba's np.dot calls) splits a ddot over its own threads above this size
+# (kernel/x86_64/ddot.c: n > 10000): the sum then depends on the OpenBLAS thread count, and on a
+# loaded machine every such call waits for the second thread (T22-A150 at 2 mm, one numba thread:
+# viscous + PPE 139 -> 1529 ms/step with OpenBLAS at its default 2 threads vs 1 thread).
+DOT_BLAS_MAX = 10000
+
+
+@njit(cache=True)
+def _dot(a, b):
+    """a·b for the (M)IC-CG: BLAS ddot (np.dot) up to DOT_BLAS_MAX entries, so that the runs of up
+    to ~10 000 particles (dx = 4 mm) keep their iterates bit for bit; above, a serial sum in a
+    fixed order (8 interleaved partial sums, added pairwise), the same on any machine and thread
+    count, never waiting for BLAS threads."""
+    n = a.size
+    if n <= DOT_BLAS_MAX:
+        return np.dot(a, b)
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    s3 = 0.0
+    s4 = 0.0
+    s5 = 0.0
+    s6 = 0.0
+    s7 = 0.0
+    m = n - n % 8
+    for i in range(0, m, 8):
+        s0 += a[i] * b[i]
+        s1 += a[i + 1] * b[i + 1]
+        s2 += a[i + 2] * b[i + 2]
+        s3 += a[i + 3] * b[i + 3]
+        s4 += a[i + 4] * b[i + 4]
+        s5 += a[i + 5] * b[i + 5]
+        s6 += a[i + 6] * b[i + 6]
+        s7 += a[i + 7] * b[i + 7]
+    for i in range(m, n):
+        s0 += a[i] * b[i]
+    return ((s0 + s1) + (s2 + s3)) + ((s4 + s5) + (s6 + s7))
+
+
 @njit(cache=True)
 def csr_matvec(indptr, indices, data, x, out):
     """out = A x (row sums in storage order, from 0)."""
@@ -364,7 +403,7 @@ def _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r):
         for k in range(up[i], up[i + 1]):
             acc += uv[k] * x[ui[k]]
         r[i] = b[i] - acc
-    return math.sqrt(np.dot(r, r))
+    return math.sqrt(_dot(r, r))
 
 
 @njit(cache=True)
@@ -458,7 +497,7 @@ def _residual(indptr, indices, data, b, x, r):
     csr_matvec(indptr, indices, data, x, r)
     for i in range(b.size):
         r[i] = b[i] - r[i]
-    return math.sqrt(np.dot(r, r))
+    return math.sqrt(_dot(r, r))
 
 
 @njit(cache=True)
@@ -467,19 +506,19 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
     CG (Eisenstat form, see above), warm-started from x0. Returns (x, iterations, info), info = -1
     when the incomplete factorisation breaks down (non-positive pivot; x = x0)."""
     n = b.size
-    thresh = max(atol, rtol * math.sqrt(np.dot(b, b)))
+    thresh = max(atol, rtol * math.sqrt(_dot(b, b)))
     x = x0.copy()
     r = np.empty(n)
-    if math.sqrt(np.dot(b, b)) == 0.0:
+    if math.sqrt(_dot(b, b)) == 0.0:
         return b.copy(), 0, 0
-    if not math.isfinite(np.dot(b, b)):
+    if not math.isfinite(_dot(b, b)):
         return x, 0, NONFINITE
     lp, li, lv, up, ui, uv, diag = split_triangles(indptr, indices, data)
     if _any_nonzero(x):
         nr = _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r)
     else:
         r[:] = b
-        nr = math.sqrt(np.dot(r, r))
+        nr = math.sqrt(_dot(r, r))
     if nr < thresh:
         return x, 0, 0
     dt, bad = mic_diagonal(lp, li, lv, up, uv, diag, mic)
@@ -500,7 +539,7 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
     s = np.empty(n)
     e = np.empty(n)
     xt = np.empty(n)
-    nrh0 = math.sqrt(np.dot(rh, rh))
+    nrh0 = math.sqrt(_dot(rh, rh))
     if not (nrh0 > 0.0 and math.isfinite(nr)):
         return x, 0, BREAKDOWN
     scale = nr / nrh0  # ‖r‖ / ‖r̂‖, refreshed at every true-residual check
@@ -508,7 +547,7 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
     for it in range(maxiter):
         for i in range(n):
             z[i] = dt[i] * rh[i]
-        rho = np.dot(rh, z)
+        rho = _dot(rh, z)
         if not rho > 0.0:
             break  # breakdown (below)
         if it > 0:
@@ -518,7 +557,7 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
         else:
             p[:] = z
         _eisenstat_product(lp, li, lv, up, ui, uv, dinv, kd, p, t, s, q)
-        pq = np.dot(p, q)
+        pq = _dot(p, q)
         if not pq > 0.0:
             break  # zero/negative curvature (or NaN): A singular or indefinite
         alpha = rho / pq
@@ -526,7 +565,7 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
             eh[i] += alpha * p[i]
             rh[i] -= alpha * q[i]
         rho_prev = rho
-        nrh = math.sqrt(np.dot(rh, rh))
+        nrh = math.sqrt(_dot(rh, rh))
         if scale * nrh < thresh:
             _upper_solve(up, ui, uv, dinv, eh, e)
             for i in range(n):
@@ -594,11 +633,11 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
     diags = (diag_u, diag_v)
     for s in range(2):
         b = bs[s]
-        thresh[s] = max(atol, rtol * math.sqrt(np.dot(b, b)))
-        if math.sqrt(np.dot(b, b)) == 0.0:
+        thresh[s] = max(atol, rtol * math.sqrt(_dot(b, b)))
+        if math.sqrt(_dot(b, b)) == 0.0:
             out[s] = b.copy()
             continue
-        if not math.isfinite(np.dot(b, b)):
+        if not math.isfinite(_dot(b, b)):
             out[s] = xs[s].copy()
             infos[s] = NONFINITE
             continue
@@ -606,7 +645,7 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
             nr = _split_residual(lp, li, lv, up, ui, uv, diags[s], b, xs[s], r[s])
         else:
             r[s, :] = b
-            nr = math.sqrt(np.dot(r[s], r[s]))
+            nr = math.sqrt(_dot(r[s], r[s]))
         out[s] = xs[s].copy()
         if not nr < thresh[s]:
             run[s] = True
@@ -639,8 +678,8 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
     for s in range(2):
         if run[s]:
             _lower_solve(lp, li, lv, dinv[s], r[s], rh[s])
-            nrh0 = math.sqrt(np.dot(rh[s], rh[s]))
-            nr0 = math.sqrt(np.dot(r[s], r[s]))
+            nrh0 = math.sqrt(_dot(rh[s], rh[s]))
+            nr0 = math.sqrt(_dot(r[s], r[s]))
             if nrh0 > 0.0 and math.isfinite(nr0):
                 scale[s] = nr0 / nrh0
             else:
@@ -656,7 +695,7 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
             dt = dts[s][0]
             for i in range(n):
                 z[i] = dt[i] * rh[s, i]
-            rho[s] = np.dot(rh[s], z)
+            rho[s] = _dot(rh[s], z)
             if not rho[s] > 0.0:
                 run[s] = False
                 its[s] = it
@@ -673,7 +712,7 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
         for s in range(2):
             if not run[s]:
                 continue
-            pq = np.dot(p[s], q[s])
+            pq = _dot(p[s], q[s])
             if not pq > 0.0:
                 run[s] = False
                 its[s] = it
@@ -684,7 +723,7 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
                 eh[s, i] += alpha * p[s, i]
                 rh[s, i] -= alpha * q[s, i]
             rho_prev[s] = rho[s]
-            nrh = math.sqrt(np.dot(rh[s], rh[s]))
+            nrh = math.sqrt(_dot(rh[s], rh[s]))
             if scale[s] * nrh < thresh[s]:
                 _upper_solve(up, ui, uv, dinv[s], eh[s], e)
                 for i in range(n):
