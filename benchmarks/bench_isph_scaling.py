@@ -11,7 +11,23 @@ Run (one command per figure set):
   python benchmarks/bench_isph_scaling.py --threads 1,2      (one subprocess per thread count, interleaved)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py --to-rest 2,1   (T22-A70 to rest, wall time)
 Timings on a shared machine are noisy: ``--repeats`` runs the same steps again from the
-checkpoint (interleaved over the solvers) and the median is printed.
+checkpoint (interleaved over the solvers) and the median is printed, with the process CPU time.
+
+Measured 2026-12-01 (session 5) on the shared 2-core machine at load average 4.5-6.5 (four agents;
+``--threads 1,2,1,2 --repeats 1 --steps 20``, the two runs of each thread count shown), ms/step
+[neighbours, kernels, viscous, PPE], cg_dic, 30.9-36 PPE and 18-29 viscous iterations per step:
+  1 thread:  N = 3750: 47.8 / 24.1 [6.6, 11.1, 12.3, 17.5]; 15000: 161 / 135; 60000: 483 / 596
+             [67.7, 60.6, 158.5, 195.0]; cost/step ~ N^0.83 / N^1.16 (wall), N^1.00 / N^1.08 (CPU)
+  2 threads: N = 3750: 24.4 / 45.1; 15000: 114 / 153; 60000: 634 / 815; N^1.18 / N^1.04 (wall),
+             N^0.98 / N^1.06 (CPU)
+  peak RSS (all three states in one process, 60 000 particles the largest) 360-370 MB.
+The spread between repeats (2x at 4 mm) is the machine's load, not the code; no 2-thread speed-up
+could be resolved under it. The same code idle was not measurable in session 5 (the 6.1 ms/step of
+``bench_isph.py`` in the README was measured on an idle core in session 4). Before the fixed-order
+dot products of linsolve (OpenBLAS threading each ddot above 10 000 entries), the 2 mm step read
+1434/1330 ms (now 128/132 ms in the same A/B, 10 steps). T22-A70 to rest at 2 mm (7000 particles,
+one thread, load average 6-13): 807 s, 4191 steps, 192.5 ms/step, at rest 17.97 t_c, front 2.136 m,
+peak RSS 426 MB, 0 fallbacks.
 """
 from __future__ import annotations
 
