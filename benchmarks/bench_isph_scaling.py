@@ -21,8 +21,15 @@ Measured 2026-12-01 (session 5) on the shared 2-core machine at load average 4.5
   2 threads: N = 3750: 24.4 / 45.1; 15000: 114 / 153; 60000: 634 / 815; N^1.18 / N^1.04 (wall),
              N^0.98 / N^1.06 (CPU)
   peak RSS (all three states in one process, 60 000 particles the largest) 360-370 MB.
-The spread between repeats (2x at 4 mm) is the machine's load, not the code; no 2-thread speed-up
-could be resolved under it. The same code idle was not measurable in session 5 (the 6.1 ms/step of
+Again at load average 2.7-4.7 (``--threads 1,2,1,2,1,2``), medians of the three runs of each:
+  1 thread:  3750: 23.8 ms/step (1.57e5 particle-steps/s) [3.1, 4.4, 7.4, 7.4 in the fastest run];
+             15000: 91.7; 60000: 481 (fastest 350 [43.4, 42.3, 121.8, 141.8], 1.71e5 particle-steps/s);
+             cost/step ~ N^0.99 / N^1.08 / N^0.99 (wall), N^0.98-1.00 (CPU)
+  2 threads: 3750: 24.2; 15000: 100.4; 60000: 368; N^0.92-0.99 (wall)
+The 2-thread runs used as much CPU time as wall time (e.g. 365 CPU ms in a 367 ms step): the second
+core was taken by other jobs. Control: a trivially parallel numba prange loop gave 0.53-0.76 s on
+one and 0.60-0.65 s on two threads at the same load. So the spread between repeats (2x at 4 mm)
+is the machine's load, not the code, and no 2-thread speed-up could be resolved under it. The same code idle was not measurable in session 5 (the 6.1 ms/step of
 ``bench_isph.py`` in the README was measured on an idle core in session 4). Before the fixed-order
 dot products of linsolve (OpenBLAS threading each ddot above 10 000 entries), the 2 mm step read
 1434/1330 ms (now 128/132 ms in the same A/B, 10 steps). T22-A70 to rest at 2 mm (7000 particles,
