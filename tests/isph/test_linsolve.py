@@ -267,3 +267,43 @@ def test_dic_pair_equals_two_single_dic_solves_bitwise():
     xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000)
     assert infov == -1 and np.array_equal(xv, bv)
     assert (itu, infou) == (itu1, 0) and np.array_equal(xu, xu1)
+
+
+def test_dic_two_threads_equals_the_pair_bitwise():
+    """pcg_dic_two (u and v as two pcg_dic solves, one per thread) gives the pair's results bit for bit."""
+    from granudep.isph.linsolve import pcg_dic_two
+    indptr, indices, data = _particle_matrix(shift=0.05)
+    n = indptr.size - 1
+    rng = np.random.default_rng(12)
+    diag_v = data[indptr[:-1]] + 0.3 * rng.random(n)
+    bu, bv = rng.standard_normal(n), 0.01 * rng.standard_normal(n)
+    a = pcg_dic_pair(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.97)
+    b = pcg_dic_two(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.97)
+    assert a[1] > 3 and a[2] == a[5] == 0
+    for p, q in zip(a, b):
+        assert np.array_equal(p, q)
+    bad_v = diag_v.copy()
+    bad_v[3] = -1.0  # breakdown on the v side only
+    a = pcg_dic_pair(indptr, indices, data, bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.0)
+    b = pcg_dic_two(indptr, indices, data, bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.0)
+    assert a[5] == b[5] == -1 and a[2] == b[2] == 0 and np.array_equal(a[0], b[0])
+
+
+def test_dot_is_blas_up_to_10000_then_a_fixed_order_sum():
+    """(M)IC-CG inner products: BLAS ddot (bit for bit) up to DOT_BLAS_MAX entries; above it (where
+    OpenBLAS would thread the sum) eight interleaved serial partial sums, added pairwise."""
+    from granudep.isph.linsolve import DOT_BLAS_MAX, _dot
+    rng = np.random.default_rng(5)
+    a, b = rng.standard_normal(DOT_BLAS_MAX), rng.standard_normal(DOT_BLAS_MAX)
+    assert _dot(a, b) == np.dot(a, b)
+    n = DOT_BLAS_MAX + 13
+    a, b = rng.standard_normal(n), rng.standard_normal(n)
+    s = [0.0] * 8
+    m = n - n % 8
+    for i in range(m):  # reference, test only
+        s[i % 8] += a[i] * b[i]
+    for i in range(m, n):
+        s[0] += a[i] * b[i]
+    ref = ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]))
+    assert _dot(a, b) == ref
+    assert abs(ref - np.dot(a, b)) < 1e-12 * np.abs(a * b).sum()

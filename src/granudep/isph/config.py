@@ -134,10 +134,13 @@ class Numerics:
                                     "fields), or the negative adjoint of the corrector's pressure gradient "
                                     "(energy-consistent projection, isph/projection.py)")
     kernel_completion: bool = param(True, doc="PPE: missing neighbours next to the free surface count as p = 0")
-    pressure_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic"),
+    pressure_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic", "amg_sa", "amg_rs"),
                                  doc="PPE: SuperLU factorisation, Jacobi-preconditioned CG (warm start; scipy's "
-                                     "iterates bit for bit), or CG with diagonal incomplete Cholesky (Eisenstat; "
-                                     "~2.5x fewer iterations, ~2x faster, true-residual stopping test)")
+                                     "iterates bit for bit), CG with diagonal incomplete Cholesky (Eisenstat; "
+                                     "~2.5x fewer iterations, ~2x faster, true-residual stopping test), or CG "
+                                     "preconditioned by an algebraic-multigrid V-cycle (pyamg, optional package: "
+                                     "smoothed aggregation or Ruge-Stuben; N-independent iterations but slower "
+                                     "at 3.7k-60k particles, see docs/paper-notes.md)")
     viscous_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic"),
                                 doc="implicit viscous step: SuperLU, Jacobi-preconditioned CG (u and v in lock-step) "
                                     "or DIC-preconditioned CG, warm-started from the right-hand side")

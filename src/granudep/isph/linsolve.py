@@ -18,14 +18,62 @@ the kernels write it), so each sweep over the off-diagonal entries serves both p
 the two recurrences is exactly the single-system one (each stops on its own test).
 
 Return convention: (x, iterations, info) with info = 0 on convergence, ``maxiter`` otherwise
-(scipy's), and x = b when ‖b‖ = 0.
+(scipy's), and x = b when ‖b‖ = 0. Breakdowns never raise (issue 11 item 4): info = -1 for a
+non-positive incomplete-Cholesky pivot, ``BREAKDOWN`` (-2) for a curvature p·Ap that is not
+positive (zero, negative or NaN: A singular or indefinite), a zero or non-positive ρ = r·z or a
+zero diagonal, and ``NONFINITE`` (-3) for a right-hand side with NaN/inf; x is then the last
+finite iterate (or x0). The caller (``IsphSolver._solve_cg``) falls back to the direct solver.
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+from .neighbours import PARALLEL
+
+BREAKDOWN = -2
+NONFINITE = -3
+
+
+# OpenBLAS (scipy's, which numba's np.dot calls) splits a ddot over its own threads above this size
+# (kernel/x86_64/ddot.c: n > 10000): the sum then depends on the OpenBLAS thread count, and on a
+# loaded machine every such call waits for the second thread (T22-A150 at 2 mm, one numba thread:
+# viscous + PPE 139 -> 1529 ms/step with OpenBLAS at its default 2 threads vs 1 thread).
+DOT_BLAS_MAX = 10000
+
+
+@njit(cache=True)
+def _dot(a, b):
+    """a·b for the (M)IC-CG: BLAS ddot (np.dot) up to DOT_BLAS_MAX entries, so that the runs of up
+    to ~10 000 particles (dx = 4 mm) keep their iterates bit for bit; above, a serial sum in a
+    fixed order (8 interleaved partial sums, added pairwise), the same on any machine and thread
+    count, never waiting for BLAS threads."""
+    n = a.size
+    if n <= DOT_BLAS_MAX:
+        return np.dot(a, b)
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    s3 = 0.0
+    s4 = 0.0
+    s5 = 0.0
+    s6 = 0.0
+    s7 = 0.0
+    m = n - n % 8
+    for i in range(0, m, 8):
+        s0 += a[i] * b[i]
+        s1 += a[i + 1] * b[i + 1]
+        s2 += a[i + 2] * b[i + 2]
+        s3 += a[i + 3] * b[i + 3]
+        s4 += a[i + 4] * b[i + 4]
+        s5 += a[i + 5] * b[i + 5]
+        s6 += a[i + 6] * b[i + 6]
+        s7 += a[i + 7] * b[i + 7]
+    for i in range(m, n):
+        s0 += a[i] * b[i]
+    return ((s0 + s1) + (s2 + s3)) + ((s4 + s5) + (s6 + s7))
 
 
 @njit(cache=True)
@@ -49,14 +97,17 @@ def _any_nonzero(x):
 
 @njit(cache=True)
 def _start(indptr, indices, data, diag, b, x0, rtol, atol):
-    """Initial state of one recurrence: x, r, dinv, the stopping threshold and ‖b‖ == 0."""
+    """Initial state of one recurrence: x, r, dinv, the stopping threshold, ‖b‖ == 0 and a status
+    (0, ``NONFINITE`` for a NaN/inf right-hand side, ``BREAKDOWN`` for a zero diagonal)."""
     n = b.size
     bnrm2 = math.sqrt(np.dot(b, b))
     thresh = max(atol, rtol * bnrm2)
     x = x0.copy()
     r = np.empty(n)
     if bnrm2 == 0.0:
-        return b.copy(), r, np.empty(n), thresh, True
+        return b.copy(), r, np.empty(n), thresh, True, 0
+    if not math.isfinite(bnrm2):
+        return x, r, np.empty(n), thresh, False, NONFINITE
     if _any_nonzero(x):
         csr_matvec(indptr, indices, data, x, r)
         for i in range(n):
@@ -65,8 +116,10 @@ def _start(indptr, indices, data, diag, b, x0, rtol, atol):
         r[:] = b
     dinv = np.empty(n)
     for i in range(n):
+        if diag[i] == 0.0:
+            return x, r, dinv, thresh, False, BREAKDOWN
         dinv[i] = 1.0 / diag[i]
-    return x, r, dinv, thresh, False
+    return x, r, dinv, thresh, False, 0
 
 
 @njit(cache=True)
@@ -82,9 +135,12 @@ def _diag_first(indptr, indices, data):
 def pcg_jacobi(indptr, indices, data, b, x0, rtol, atol, maxiter):
     """Solve A x = b (A symmetric positive definite, CSR, diagonal stored first in each row)."""
     n = b.size
-    x, r, dinv, thresh, zero = _start(indptr, indices, data, _diag_first(indptr, indices, data), b, x0, rtol, atol)
+    x, r, dinv, thresh, zero, status = _start(indptr, indices, data, _diag_first(indptr, indices, data), b, x0,
+                                              rtol, atol)
     if zero:
         return x, 0, 0
+    if status != 0:
+        return x, 0, status
     z = np.empty(n)
     p = np.empty(n)
     q = np.empty(n)
@@ -95,6 +151,8 @@ def pcg_jacobi(indptr, indices, data, b, x0, rtol, atol, maxiter):
         for i in range(n):
             z[i] = dinv[i] * r[i]
         rho = np.dot(r, z)
+        if not rho > 0.0:
+            return x, it, BREAKDOWN  # r·D⁻¹r <= 0 (or NaN): D not positive
         if it > 0:
             beta = rho / rho_prev
             for i in range(n):
@@ -102,7 +160,10 @@ def pcg_jacobi(indptr, indices, data, b, x0, rtol, atol, maxiter):
         else:
             p[:] = z
         csr_matvec(indptr, indices, data, p, q)
-        alpha = rho / np.dot(p, q)
+        pq = np.dot(p, q)
+        if not pq > 0.0:
+            return x, it, BREAKDOWN  # zero/negative curvature: A singular or indefinite
+        alpha = rho / pq
         for i in range(n):
             x[i] += alpha * p[i]
             r[i] -= alpha * q[i]
@@ -144,7 +205,8 @@ def pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol,
         if indices[indptr[i]] != i:
             raise ValueError("pcg_jacobi_pair: the diagonal must be the first entry of each row")
     diag_u = _diag_first(indptr, indices, data)
-    xu, ru, dinvu, thu, zero_u = _start(indptr, indices, data, diag_u, bu, xu0, rtol, atol)
+    xu, ru, dinvu, thu, zero_u, info_u = _start(indptr, indices, data, diag_u, bu, xu0, rtol, atol)
+    info_v = 0
     # A_v x for the initial residual: the pair product with the u side switched off
     xv = xv0.copy()
     bnv = math.sqrt(np.dot(bv, bv))
@@ -154,6 +216,8 @@ def pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol,
     dinvv = np.empty(n)
     if zero_v:
         xv = bv.copy()
+    elif not math.isfinite(bnv):
+        info_v = NONFINITE
     else:
         if _any_nonzero(xv):
             _pair_matvec(indptr, indices, data, diag_v, xv, xv, rv, rv, False, True)
@@ -162,6 +226,9 @@ def pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol,
         else:
             rv[:] = bv
         for i in range(n):
+            if diag_v[i] == 0.0:
+                info_v = BREAKDOWN
+                break
             dinvv[i] = 1.0 / diag_v[i]
     zu = np.empty(n)
     zv = np.empty(n)
@@ -169,12 +236,10 @@ def pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol,
     pv = np.empty(n)
     qu = np.empty(n)
     qv = np.empty(n)
-    run_u = not zero_u
-    run_v = not zero_v
+    run_u = not zero_u and info_u == 0
+    run_v = not zero_v and info_v == 0
     it_u = 0
     it_v = 0
-    info_u = 0
-    info_v = 0
     rho_u = 1.0
     rho_v = 1.0
     for it in range(maxiter):
@@ -190,6 +255,11 @@ def pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol,
             for i in range(n):
                 zu[i] = dinvu[i] * ru[i]
             rho = np.dot(ru, zu)
+            if not rho > 0.0:
+                run_u = False
+                it_u = it
+                info_u = BREAKDOWN
+        if run_u:
             if it > 0:
                 beta = rho / rho_u
                 for i in range(n):
@@ -201,6 +271,11 @@ def pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol,
             for i in range(n):
                 zv[i] = dinvv[i] * rv[i]
             rho = np.dot(rv, zv)
+            if not rho > 0.0:
+                run_v = False
+                it_v = it
+                info_v = BREAKDOWN
+        if run_v:
             if it > 0:
                 beta = rho / rho_v
                 for i in range(n):
@@ -208,14 +283,28 @@ def pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol,
             else:
                 pv[:] = zv
             rho_v = rho
+        if not (run_u or run_v):
+            break
         _pair_matvec(indptr, indices, data, diag_v, pu, pv, qu, qv, run_u, run_v)
         if run_u:
-            alpha = rho_u / np.dot(pu, qu)
+            pq = np.dot(pu, qu)
+            if not pq > 0.0:
+                run_u = False
+                it_u = it
+                info_u = BREAKDOWN
+        if run_u:
+            alpha = rho_u / pq
             for i in range(n):
                 xu[i] += alpha * pu[i]
                 ru[i] -= alpha * qu[i]
         if run_v:
-            alpha = rho_v / np.dot(pv, qv)
+            pq = np.dot(pv, qv)
+            if not pq > 0.0:
+                run_v = False
+                it_v = it
+                info_v = BREAKDOWN
+        if run_v:
+            alpha = rho_v / pq
             for i in range(n):
                 xv[i] += alpha * pv[i]
                 rv[i] -= alpha * qv[i]
@@ -314,7 +403,7 @@ def _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r):
         for k in range(up[i], up[i + 1]):
             acc += uv[k] * x[ui[k]]
         r[i] = b[i] - acc
-    return math.sqrt(np.dot(r, r))
+    return math.sqrt(_dot(r, r))
 
 
 @njit(cache=True)
@@ -408,7 +497,7 @@ def _residual(indptr, indices, data, b, x, r):
     csr_matvec(indptr, indices, data, x, r)
     for i in range(b.size):
         r[i] = b[i] - r[i]
-    return math.sqrt(np.dot(r, r))
+    return math.sqrt(_dot(r, r))
 
 
 @njit(cache=True)
@@ -417,17 +506,19 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
     CG (Eisenstat form, see above), warm-started from x0. Returns (x, iterations, info), info = -1
     when the incomplete factorisation breaks down (non-positive pivot; x = x0)."""
     n = b.size
-    thresh = max(atol, rtol * math.sqrt(np.dot(b, b)))
+    thresh = max(atol, rtol * math.sqrt(_dot(b, b)))
     x = x0.copy()
     r = np.empty(n)
-    if math.sqrt(np.dot(b, b)) == 0.0:
+    if math.sqrt(_dot(b, b)) == 0.0:
         return b.copy(), 0, 0
+    if not math.isfinite(_dot(b, b)):
+        return x, 0, NONFINITE
     lp, li, lv, up, ui, uv, diag = split_triangles(indptr, indices, data)
     if _any_nonzero(x):
         nr = _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r)
     else:
         r[:] = b
-        nr = math.sqrt(np.dot(r, r))
+        nr = math.sqrt(_dot(r, r))
     if nr < thresh:
         return x, 0, 0
     dt, bad = mic_diagonal(lp, li, lv, up, uv, diag, mic)
@@ -448,12 +539,17 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
     s = np.empty(n)
     e = np.empty(n)
     xt = np.empty(n)
-    scale = nr / math.sqrt(np.dot(rh, rh))  # ‖r‖ / ‖r̂‖, refreshed at every true-residual check
+    nrh0 = math.sqrt(_dot(rh, rh))
+    if not (nrh0 > 0.0 and math.isfinite(nr)):
+        return x, 0, BREAKDOWN
+    scale = nr / nrh0  # ‖r‖ / ‖r̂‖, refreshed at every true-residual check
     rho_prev = 1.0
     for it in range(maxiter):
         for i in range(n):
             z[i] = dt[i] * rh[i]
-        rho = np.dot(rh, z)
+        rho = _dot(rh, z)
+        if not rho > 0.0:
+            break  # breakdown (below)
         if it > 0:
             beta = rho / rho_prev
             for i in range(n):
@@ -461,12 +557,15 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
         else:
             p[:] = z
         _eisenstat_product(lp, li, lv, up, ui, uv, dinv, kd, p, t, s, q)
-        alpha = rho / np.dot(p, q)
+        pq = _dot(p, q)
+        if not pq > 0.0:
+            break  # zero/negative curvature (or NaN): A singular or indefinite
+        alpha = rho / pq
         for i in range(n):
             eh[i] += alpha * p[i]
             rh[i] -= alpha * q[i]
         rho_prev = rho
-        nrh = math.sqrt(np.dot(rh, rh))
+        nrh = math.sqrt(_dot(rh, rh))
         if scale * nrh < thresh:
             _upper_solve(up, ui, uv, dinv, eh, e)
             for i in range(n):
@@ -475,10 +574,12 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
             if nr < thresh:
                 return xt, it + 1, 0
             scale = nr / max(nrh, 1e-300)
-    _upper_solve(up, ui, uv, dinv, eh, e)
-    for i in range(n):
-        x[i] += e[i]
-    return x, maxiter, maxiter
+    else:
+        _upper_solve(up, ui, uv, dinv, eh, e)
+        for i in range(n):
+            x[i] += e[i]
+        return x, maxiter, maxiter
+    return x, it, BREAKDOWN
 
 
 @njit(cache=True)
@@ -532,15 +633,19 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
     diags = (diag_u, diag_v)
     for s in range(2):
         b = bs[s]
-        thresh[s] = max(atol, rtol * math.sqrt(np.dot(b, b)))
-        if math.sqrt(np.dot(b, b)) == 0.0:
+        thresh[s] = max(atol, rtol * math.sqrt(_dot(b, b)))
+        if math.sqrt(_dot(b, b)) == 0.0:
             out[s] = b.copy()
+            continue
+        if not math.isfinite(_dot(b, b)):
+            out[s] = xs[s].copy()
+            infos[s] = NONFINITE
             continue
         if _any_nonzero(xs[s]):
             nr = _split_residual(lp, li, lv, up, ui, uv, diags[s], b, xs[s], r[s])
         else:
             r[s, :] = b
-            nr = math.sqrt(np.dot(r[s], r[s]))
+            nr = math.sqrt(_dot(r[s], r[s]))
         out[s] = xs[s].copy()
         if not nr < thresh[s]:
             run[s] = True
@@ -573,7 +678,13 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
     for s in range(2):
         if run[s]:
             _lower_solve(lp, li, lv, dinv[s], r[s], rh[s])
-            scale[s] = math.sqrt(np.dot(r[s], r[s])) / math.sqrt(np.dot(rh[s], rh[s]))
+            nrh0 = math.sqrt(_dot(rh[s], rh[s]))
+            nr0 = math.sqrt(_dot(r[s], r[s]))
+            if nrh0 > 0.0 and math.isfinite(nr0):
+                scale[s] = nr0 / nrh0
+            else:
+                run[s] = False
+                infos[s] = BREAKDOWN
     rho = np.zeros(2)
     for it in range(maxiter):
         if not (run[0] or run[1]):
@@ -584,7 +695,12 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
             dt = dts[s][0]
             for i in range(n):
                 z[i] = dt[i] * rh[s, i]
-            rho[s] = np.dot(rh[s], z)
+            rho[s] = _dot(rh[s], z)
+            if not rho[s] > 0.0:
+                run[s] = False
+                its[s] = it
+                infos[s] = BREAKDOWN
+                continue
             if it > 0:
                 beta = rho[s] / rho_prev[s]
                 for i in range(n):
@@ -596,12 +712,18 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
         for s in range(2):
             if not run[s]:
                 continue
-            alpha = rho[s] / np.dot(p[s], q[s])
+            pq = _dot(p[s], q[s])
+            if not pq > 0.0:
+                run[s] = False
+                its[s] = it
+                infos[s] = BREAKDOWN  # zero/negative curvature (or NaN)
+                continue
+            alpha = rho[s] / pq
             for i in range(n):
                 eh[s, i] += alpha * p[s, i]
                 rh[s, i] -= alpha * q[s, i]
             rho_prev[s] = rho[s]
-            nrh = math.sqrt(np.dot(rh[s], rh[s]))
+            nrh = math.sqrt(_dot(rh[s], rh[s]))
             if scale[s] * nrh < thresh[s]:
                 _upper_solve(up, ui, uv, dinv[s], eh[s], e)
                 for i in range(n):
@@ -621,3 +743,30 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
             its[s] = maxiter
             infos[s] = maxiter
     return out[0], its[0], infos[0], out[1], its[1], infos[1]
+
+
+@njit(cache=True, parallel=PARALLEL)
+def pcg_dic_two(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
+    """The u and v viscous systems of :func:`pcg_dic_pair` as two independent :func:`pcg_dic` solves,
+    one per thread (prange over the two systems): the same results bit for bit as the pair (each
+    side of the pair is its own pcg_dic, see its doc) on any number of threads, in about half the
+    time on two. Returns (x_u, iterations_u, info_u, x_v, iterations_v, info_v)."""
+    n = bu.size
+    for i in range(n):
+        if indices[indptr[i]] != i:
+            raise ValueError("pcg_dic_two: the diagonal must be the first entry of each row")
+    data_v = data.copy()
+    for i in range(n):
+        data_v[indptr[i]] = diag_v[i]
+    xs = np.empty((2, n))
+    its = np.zeros(2, np.int64)
+    infos = np.zeros(2, np.int64)
+    for s in prange(2):
+        if s == 0:
+            x, it, info = pcg_dic(indptr, indices, data, bu, xu0, rtol, atol, maxiter, mic)
+        else:
+            x, it, info = pcg_dic(indptr, indices, data_v, bv, xv0, rtol, atol, maxiter, mic)
+        xs[s, :] = x
+        its[s] = it
+        infos[s] = info
+    return xs[0].copy(), its[0], infos[0], xs[1].copy(), its[1], infos[1]

@@ -8,7 +8,15 @@ distance ``r``. With ``period > 0`` the domain is periodic in x on [0, period) (
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+
+# numba parallel options of the per-particle kernels: the prange loops only (numpy=False: array
+# allocations and reductions such as np.zeros or x.min() stay serial instead of each becoming a
+# parallel region of its own; every region costs a wake-up of the worker threads, and on a loaded
+# machine a wait for a time slice)
+PARALLEL = {"prange": True, "numpy": False, "comprehension": False, "setitem": False, "reduction": False,
+            "inplace_binop": False, "stencil": False, "fusion": False}
 
 
 @njit(cache=True)
@@ -47,7 +55,7 @@ def _minimum_image(ddx, period, half):
     return ddx
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def build_neighbours(x, y, nf, radius, period):
     """Neighbours within ``radius`` of each of the first ``nf`` particles (self excluded).
 
@@ -70,7 +78,7 @@ def build_neighbours(x, y, nf, radius, period):
     # positions in cell order: the candidates of a column of three cells are then one contiguous run
     xs = np.empty(n)
     ys = np.empty(n)
-    for s in range(n):
+    for s in prange(n):
         xs[s] = x[order[s]]
         ys[s] = y[order[s]]
     r2max = radius * radius
@@ -82,9 +90,11 @@ def build_neighbours(x, y, nf, radius, period):
     for c in range(ncx * ncy):
         width = max(width, counts[c + 1] - counts[c])
     width *= 9
+    # the rows are independent (parallel over particles, each writes its own row of ``buf`` and its
+    # count); the offsets ``start`` are the serial prefix sum of the counts, then the rows are copied
     start = np.zeros(nf + 1, np.int64)
     buf = np.empty(nf * width, np.int32)
-    for i in range(nf):
+    for i in prange(nf):
         ci = cid[i] // ncy
         cj = cid[i] % ncy
         xi = x[i]
@@ -110,13 +120,15 @@ def build_neighbours(x, y, nf, radius, period):
                     if j != i:
                         buf[base + cnt] = j
                         cnt += 1
-        start[i + 1] = start[i] + cnt
+        start[i + 1] = cnt
+    for i in range(nf):
+        start[i + 1] += start[i]
     m = start[nf]
     nbr = np.empty(m, np.int64)
     rx = np.empty(m)
     ry = np.empty(m)
     rr = np.empty(m)
-    for i in range(nf):
+    for i in prange(nf):
         k = start[i]
         for c in range(start[i + 1] - start[i]):
             j = buf[i * width + c]

@@ -22,9 +22,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ..kernels import wendland_dwdr, wendland_w
+from .neighbours import PARALLEL
 
 SLIP_NO, SLIP_NAVIER, SLIP_FREE, SLIP_COULOMB = 0, 1, 2, 3
 SLIP_CODES = {"no_slip": SLIP_NO, "navier": SLIP_NAVIER, "free_slip": SLIP_FREE, "coulomb": SLIP_COULOMB}
@@ -57,7 +58,7 @@ def wall_beta(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
     return min(1.5, wall_beta_linear(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx))
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def pair_kernel(rr, h):
     """W(r_ij) and (dW/dr)/r (:func:`_gw`) of every pair of the neighbour list, once per step for
     all the kernels below (each evaluated them again: 0.13 ms per kernel and step at 75k pairs).
@@ -68,7 +69,7 @@ def pair_kernel(rr, h):
     cw = 7.0 / (4.0 * math.pi * h * h)
     cg = 7.0 / (4.0 * math.pi * h * h * h)
     rmin = 1e-12 * h
-    for k in range(n):
+    for k in prange(n):
         r = rr[k]
         q = r / h
         t = 1.0 - 0.5 * q
@@ -102,7 +103,7 @@ def pair_viscosity(ei, ej, gi, gj, mean):
     return 0.5 * (ei + ej)
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol):
     """∇·r (free-surface detector, Lee et al. 2008), concentration C = Σ V W (self included),
     ∇C (shifting, normals) and the inverse renormalisation matrix L (Bonet & Lok 1999)."""
@@ -114,7 +115,7 @@ def geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol):
     m_xx = np.zeros(nf)
     m_yy = np.zeros(nf)
     w0 = wendland_w(0.0, h)
-    for i in range(nf):
+    for i in prange(nf):
         s_div = 0.0
         s_c = vol * w0
         sx = 0.0
@@ -153,13 +154,13 @@ def geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol):
     return divr, conc, gcx, gcy, lmat, (m_xx, m_yy)
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, lmat, p, eta,
                       wnx, wny, wc, slip, slip_length, mu_wall, dx, gx, gy, rho, eta_max, wall_ns, wall_k):
     """Renormalised ∇u (rows: du/dx, du/dy, dv/dx, dv/dy); wall neighbours carry the extrapolated
     wall velocity (normal component = u_i's, tangential (1 − βφ) u_i,t)."""
     grad = np.zeros((nf, 4))
-    for i in range(nf):
+    for i in prange(nf):
         a0 = 0.0
         a1 = 0.0
         a2 = 0.0
@@ -202,7 +203,7 @@ def velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, lmat, 
     return grad
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
     """η = μ(I) p / |γ̇| capped to [eta_min, eta_max] (eqs 4–5); returns η and |γ̇|.
 
@@ -212,7 +213,7 @@ def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
     n = p.size
     eta = np.empty(n)
     gdot = np.empty(n)
-    for i in range(n):
+    for i in prange(n):
         dxx = grad[i, 0]
         dyy = grad[i, 3]
         dxy = 0.5 * (grad[i, 1] + grad[i, 2])
@@ -231,7 +232,7 @@ def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
     return eta, gdot
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, p, eta, gdot, wnx, wny, wc,
                      slip, slip_length, mu_wall, dx, dt, rho, eps2, mean, gx, gy, eta_max, lap_norm, wall_ns,
                      wall_k):
@@ -244,18 +245,20 @@ def assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, p, eta,
     Returns indptr, indices, data (diagonal first in each row, u matrix) and diag_v (v matrix).
     """
     indptr = np.zeros(nf + 1, np.int64)
-    for i in range(nf):
+    for i in prange(nf):
         cnt = 1
         for k in range(start[i], start[i + 1]):
             if nbr[k] < nf:
                 cnt += 1
-        indptr[i + 1] = indptr[i] + cnt
+        indptr[i + 1] = cnt
+    for i in range(nf):
+        indptr[i + 1] += indptr[i]
     nnz = indptr[nf]
     indices = np.empty(nnz, np.int64)
     data = np.empty(nnz)
     diag_v = np.empty(nf)
     fac = dt / rho
-    for i in range(nf):
+    for i in prange(nf):
         pos = indptr[i]
         dpos = pos
         indices[pos] = i
@@ -288,7 +291,7 @@ def assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, p, eta,
     return indptr, indices, data, diag_v
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def wall_contact(start, nbr, nf, x, y, planes, dx, h, cover):
     """Per particle and wall plane (n, c): distance d = n·x − c if the particle is the first layer
     over that wall (d < 2h and no granular particle between it and the wall, i.e. none with
@@ -301,7 +304,7 @@ def wall_contact(start, nbr, nf, x, y, planes, dx, h, cover):
     npl = planes.shape[0]
     dist = np.full((nf, npl), np.inf)
     col = np.zeros((nf, npl))
-    for i in range(nf):
+    for i in prange(nf):
         for q in range(npl):
             nx = planes[q, 0]
             ny = planes[q, 1]
@@ -338,13 +341,13 @@ def wall_contact(start, nbr, nf, x, y, planes, dx, h, cover):
     return dist, col
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def detached_from_walls(contact, limit):
     """Particles whose nearest wall contact (:func:`wall_contact`) is finite but farther than
     ``limit`` (numpy's min over the short axis of ``contact`` cost 0.12 ms per call)."""
     n, npl = contact.shape
     out = np.zeros(n, np.bool_)
-    for i in range(n):
+    for i in prange(n):
         m = np.inf
         for q in range(npl):
             m = min(m, contact[i, q])
@@ -352,12 +355,12 @@ def detached_from_walls(contact, limit):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def lmat_pressure(lmat, fs, mxx, myy):
     """Renormalisation of the pressure gradient: ``lmat``, except on free-surface particles,
     where only the diagonal is renormalised (1/M_xx, 1/M_yy where both > 0.4, else none)."""
     out = lmat.copy()
-    for i in range(fs.size):
+    for i in prange(fs.size):
         if fs[i]:
             out[i, 1] = 0.0
             out[i, 2] = 0.0
@@ -370,7 +373,7 @@ def lmat_pressure(lmat, fs, mxx, myy):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def contact_length(start, nbr, nf, x, y, contact, planes, dx):
     """Wall length carried by each contact particle (Voronoi cell along the wall): half the distance
     to the nearest contact particle of the same wall on either side (dx/2 on a side without one
@@ -379,7 +382,7 @@ def contact_length(start, nbr, nf, x, y, contact, planes, dx):
     and a fixed dx per particle loses that fraction of the basal friction."""
     npl = planes.shape[0]
     length = np.zeros((nf, npl))
-    for i in range(nf):
+    for i in prange(nf):
         for q in range(npl):
             if not contact[i, q] < np.inf:
                 continue
@@ -403,7 +406,7 @@ def contact_length(start, nbr, nf, x, y, contact, planes, dx):
     return length
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, dx, dt, u_eps, diag_u, diag_v,
                       length):
     """Coulomb wall friction as an implicit drag on the first particle layer (slip = coulomb).
@@ -418,7 +421,7 @@ def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, d
     k = μ_B p_w l/(ρ dx² max(|u_t|, u_eps)), added implicitly to the diagonal of the tangential
     component. It sticks (static friction up to μ_B p_w) when |u_t| < u_eps.
     """
-    for i in range(nf):
+    for i in prange(nf):
         for q in range(planes.shape[0]):
             if not contact[i, q] < np.inf:
                 continue
@@ -442,7 +445,7 @@ def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, d
             diag_v[i] += dt * kd * nx * nx
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, u, v, lmat):
     """∇·u_i = tr(L_i Σ_j V (u_j − u_i) ⊗ ∇_i W_ij) over granular neighbours (walls enter through
     the pressure Neumann condition, not here). With the renormalisation L (identity where the
@@ -451,7 +454,7 @@ def divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, u, v, lmat):
     the ∇·r test had just flagged interior, and the projection answered with pressure spikes of
     10³–10⁴ Pa that launched particles (Bagnold test, θ = 30°)."""
     div = np.zeros(nf)
-    for i in range(nf):
+    for i in prange(nf):
         axx = 0.0
         axy = 0.0
         ayx = 0.0
@@ -471,7 +474,7 @@ def divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, u, v, lmat):
     return div
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_dir, div, us, vs, conc, c0,
                  relax, wnx, wny, dt, rho, eps2, a_full, lap_norm):
     """PPE Σ_j a_ij (p_i − p_j) = −(ρ/Δt) ∇·u* − γ ρ/Δt² min(1 − C_i/C0, 0) over the unknown
@@ -482,7 +485,7 @@ def assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_d
     full-lattice sum (``a_full`` <= 0 switches this off).
     Symmetric positive definite whenever every cluster touches a free surface."""
     indptr = np.zeros(n_unknown + 1, np.int64)
-    for i in range(nf):
+    for i in prange(nf):
         row = unknown[i]
         if row < 0:
             continue
@@ -498,7 +501,7 @@ def assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_d
     indices = np.empty(nnz, np.int64)
     data = np.empty(nnz)
     rhs = np.zeros(n_unknown)
-    for i in range(nf):
+    for i in prange(nf):
         row = unknown[i]
         if row < 0:
             continue
@@ -536,7 +539,7 @@ def assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_d
     return indptr, indices, data, rhs
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, p, us, vs, lmat, wnx, wny, dt, rho, detached):
     """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure.
 
@@ -545,7 +548,7 @@ def pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, p, us, vs, lmat, w
     within the kernel support (2h), hovering without contact."""
     gpx = np.zeros(nf)
     gpy = np.zeros(nf)
-    for i in range(nf):
+    for i in prange(nf):
         ax = 0.0
         ay = 0.0
         for k in range(start[i], start[i + 1]):
@@ -587,7 +590,7 @@ def wall_pressure_at_base(start, nbr, rx, ry, rr, nf, p, us, vs, wnx, wny, dt, r
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def smoothed_gradient(start, nbr, wk, nf, h, vol, gx, gy):
     """Kernel (Shepard) average of a granular particle field's gradient over each support: the
     surface normal of the shifting. The raw ∇C of a free-surface particle points at the nearest
@@ -597,7 +600,7 @@ def smoothed_gradient(start, nbr, wk, nf, h, vol, gx, gy):
     sx = np.zeros(nf)
     sy = np.zeros(nf)
     w0 = wendland_w(0.0, h)
-    for i in range(nf):
+    for i in prange(nf):
         ax = w0 * gx[i]
         ay = w0 * gy[i]
         ws = w0
@@ -613,7 +616,7 @@ def smoothed_gradient(start, nbr, wk, nf, h, vol, gx, gy):
     return sx, sy
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def surface_band(start, nbr, wk, nf, fs, h, r_ref):
     """Weight α ∈ [0, 1] of the bed-normal part of the shift that is removed (Lind et al. 2012):
     1 on free-surface particles, Σ_{j free-surface} W_ij / W(r_ref) (at most 1) below them. Below the
@@ -625,7 +628,7 @@ def surface_band(start, nbr, wk, nf, fs, h, r_ref):
     runs)."""
     alpha = np.zeros(nf)
     w_ref = wendland_w(r_ref, h)
-    for i in range(nf):
+    for i in prange(nf):
         if fs[i]:
             alpha[i] = 1.0
             continue
@@ -638,7 +641,7 @@ def surface_band(start, nbr, wk, nf, fs, h, r_ref):
     return alpha
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def shifting(nf, gcx, gcy, u, v, alpha, h, dt, coeff, dx, ncx, ncy):
     """Fickian particle shifting δr = −A h |u| Δt ∇C (Skillen et al. 2013; Lind et al. 2012);
     the fraction ``alpha`` of the part normal to the free surface is removed (1 on free-surface
@@ -647,7 +650,7 @@ def shifting(nf, gcx, gcy, u, v, alpha, h, dt, coeff, dx, ncx, ncy):
     sy = np.zeros(nf)
     if coeff <= 0.0:
         return sx, sy
-    for i in range(nf):
+    for i in prange(nf):
         speed = math.sqrt(u[i] * u[i] + v[i] * v[i])
         dcoef = coeff * h * speed * dt
         ax = -dcoef * gcx[i]
@@ -674,13 +677,13 @@ def shifting(nf, gcx, gcy, u, v, alpha, h, dt, coeff, dx, ncx, ncy):
     return sx, sy
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=PARALLEL)
 def clamp_to_walls(nf, x, y, u, v, planes, dmin, lo, hi):
     """Safeguard against wall penetration: a particle closer than ``dmin`` to a wall plane (within
     the wall's extent [lo, hi] along it) is put back at ``dmin`` and loses its velocity into the
     wall. Returns the number of particles moved (reported in the run statistics)."""
     moved = 0
-    for i in range(nf):
+    for i in prange(nf):
         for q in range(planes.shape[0]):
             nx = planes[q, 0]
             ny = planes[q, 1]

@@ -30,7 +30,7 @@ from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_wor
 from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
 from .projection import adjoint_divergence
-from .linsolve import pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair
+from .linsolve import BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair
 from .neighbours import build_neighbours
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
                     reference_laplacian_sum)
@@ -92,6 +92,11 @@ class IsphSolver:
     def __init__(self, cfg: IsphConfig, particles: Particles | None = None):
         self.cfg = cfg
         c = cfg
+        if c.numerics.pressure_solver.startswith("amg_"):
+            from .amg import have_pyamg
+            if not have_pyamg():
+                raise ImportError(f"numerics.pressure_solver: {c.numerics.pressure_solver} needs the optional "
+                                  "package pyamg (pip install pyamg, or the [amg] extra)")
         self.parts = particles if particles is not None else build_particles(cfg)
         P = self.parts
         self.nf = P.nf
@@ -236,8 +241,8 @@ class IsphSolver:
         if c.numerics.viscous_solver == "direct":
             data_v = data.copy()
             data_v[indptr[:-1]] = diag_v
-            us = _solve_direct(indptr, indices, data, [self.u + dt * self.gx])[0]
-            vs = _solve_direct(indptr, indices, data_v, [self.v + dt * self.gy])[0]
+            us = self._direct(indptr, indices, data, self.u + dt * self.gx, "viscous (u)")
+            vs = self._direct(indptr, indices, data_v, self.v + dt * self.gy, "viscous (v)")
         else:
             bu = self.u + dt * self.gx
             bv = self.v + dt * self.gy
@@ -370,47 +375,104 @@ class IsphSolver:
 
     def _solve_ppe(self, indptr, indices, data, rhs, guess):
         if self.cfg.numerics.pressure_solver == "direct":
-            return _solve_direct(indptr, indices, data, [rhs])[0]
+            return self._direct(indptr, indices, data, rhs, "ppe")
+        if self.cfg.numerics.pressure_solver.startswith("amg_"):
+            return self._solve_amg(indptr, indices, data, rhs, guess)
         return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
                               dic=self.cfg.numerics.pressure_solver == "cg_dic")
 
+    def _direct(self, indptr, indices, data, rhs, kind):
+        """SuperLU; a singular matrix stops the run as a blow-up (partial output kept)."""
+        try:
+            return _solve_direct(indptr, indices, data, [rhs])[0]
+        except (RuntimeError, ValueError, ZeroDivisionError) as exc:
+            raise IsphBlowUp(f"{kind} linear system: direct solver failed ({exc}) at t={self.t:.5f} s, "
+                             f"step {self.step_no}") from exc
+
+    def _fallback(self, indptr, indices, data, rhs, kind, why):
+        """Direct solve of a system whose CG broke down or did not converge (issue 11 item 4),
+        counted in ``stats.fallbacks`` (run file attribute ``linear_solver_fallbacks``)."""
+        self.stats.fallbacks += 1
+        if self.stats.fallbacks <= 10:
+            LOG.warning("isph %s: %s CG %s at t=%.5f s, step %d: direct solve for this step", self.cfg.case, kind,
+                        why, self.t, self.step_no)
+        return self._direct(indptr, indices, data, rhs, kind)
+
+    @staticmethod
+    def _why(info, sol):
+        if info == NONFINITE:
+            return "right-hand side not finite"
+        if info == BREAKDOWN:
+            return "breakdown (zero/negative curvature or NaN)"
+        if info == -1:
+            return "incomplete Cholesky breakdown (non-positive pivot)"
+        if info > 0:
+            return f"not converged in {info} iterations"
+        if not np.isfinite(sol).all():
+            return "returned a non-finite solution"
+        return None
+
+    def _solve_amg(self, indptr, indices, data, rhs, guess):
+        """AMG-preconditioned CG (:mod:`.amg`, pyamg), with the direct fallback of :meth:`_solve_cg`."""
+        from .amg import amg_pcg
+        try:
+            sol, it, info = amg_pcg(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 200,
+                                    self.cfg.numerics.pressure_solver[4:])
+        except (ArithmeticError, ValueError, RuntimeError) as exc:
+            sol, it, info = guess, 0, BREAKDOWN
+            LOG.warning("isph %s: ppe AMG raised %r", self.cfg.case, exc)
+        self.stats.ppe_iters += it
+        why = self._why(info, sol)
+        if why is not None:
+            return self._fallback(indptr, indices, data, rhs, "ppe", why)
+        return sol
+
     def _solve_cg(self, indptr, indices, data, rhs, guess, kind, dic=False):
         """Jacobi-preconditioned CG (numba, :mod:`.linsolve`: scipy's cg iteration bit for bit) or
-        DIC-preconditioned CG (``dic``), warm-started; SuperLU if it does not converge in 1000
-        iterations."""
-        if dic:
-            sol, it, info = pcg_dic(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0, 1000,
-                                    self.cfg.numerics.ic_modification)
-        else:
-            sol, it, info = pcg_jacobi(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0, 1000)
+        DIC-preconditioned CG (``dic``), warm-started; SuperLU if it breaks down, raises, returns a
+        non-finite solution or does not converge in 1000 iterations."""
+        try:
+            if dic:
+                sol, it, info = pcg_dic(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0, 1000,
+                                        self.cfg.numerics.ic_modification)
+            else:
+                sol, it, info = pcg_jacobi(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0,
+                                           1000)
+        except (ZeroDivisionError, FloatingPointError) as exc:
+            sol, it, info = guess, 0, BREAKDOWN
+            LOG.warning("isph %s: %s CG raised %r", self.cfg.case, kind, exc)
         if kind == "ppe":
             self.stats.ppe_iters += it
         else:
             self.stats.visc_iters += it
-        if info != 0:
-            self.stats.fallbacks += 1
-            return _solve_direct(indptr, indices, data, [rhs])[0]
+        why = self._why(info, sol)
+        if why is not None:
+            return self._fallback(indptr, indices, data, rhs, kind, why)
         return sol
 
     def _solve_cg_pair(self, indptr, indices, data, diag_v, bu, bv, xu0, xv0, dic=False):
         """The u and v viscous systems (same off-diagonal, own diagonals) by Jacobi- or DIC-CG in
         lock-step, warm-started from xu0, xv0; SuperLU for one that does not converge."""
         rtol = self.cfg.numerics.solver_rtol
-        if dic:
-            xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, 0.0,
-                                                          1000, self.cfg.numerics.ic_modification)
-        else:
-            xu, itu, infou, xv, itv, infov = pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol,
-                                                             0.0, 1000)
+        try:
+            if dic:
+                xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol,
+                                                              0.0, 1000, self.cfg.numerics.ic_modification)
+            else:
+                xu, itu, infou, xv, itv, infov = pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0,
+                                                                 rtol, 0.0, 1000)
+        except (ZeroDivisionError, FloatingPointError) as exc:
+            xu, itu, infou, xv, itv, infov = xu0, 0, BREAKDOWN, xv0, 0, BREAKDOWN
+            LOG.warning("isph %s: viscous CG raised %r", self.cfg.case, exc)
         self.stats.visc_iters += itu + itv
-        if infou != 0:
-            self.stats.fallbacks += 1
-            xu = _solve_direct(indptr, indices, data, [bu])[0]
-        if infov != 0:
-            self.stats.fallbacks += 1
+        why = self._why(infou, xu)
+        if why is not None:
+            xu = self._fallback(indptr, indices, data, bu, "viscous (u)", why)
+        why = self._why(infov, xv)
+        if why is not None:
             data_v = data.copy()
             data_v[indptr[:-1]] = diag_v
-            xv = _solve_direct(indptr, indices, data_v, [bv])[0]
+            xv = self._fallback(indptr, indices, data_v, bv, "viscous (v)", why)
         return xu, xv
 
     def _check(self) -> None:
