@@ -15,7 +15,8 @@ def _run(args) -> int:
     from .output import default_path, summary_line
 
     overrides = {"n_particles": args.n_particles, "ab_source": args.ab_source, "coefficients": args.coefficients,
-                 "x_inf_mode": args.x_inf_mode, "x_inf": args.x_inf}
+                 "x_inf_mode": args.x_inf_mode, "x_inf": args.x_inf,
+                 "coefficient_units": args.coefficient_units}
     deposition = not args.no_deposition
     cfg = resolve(args.case, deposition=deposition, **overrides)  # ConfigError before any work
     out = Path(args.output or default_path(cfg, deposition))
@@ -39,6 +40,9 @@ def _run(args) -> int:
         print(f"x_inf = {ds.attrs['x_inf']:.4f} m ({ds.attrs['x_inf_mode']}, {ds.attrs['x_inf_iterations']} runs, "
               f"residual {ds.attrs['x_inf_residual']:.2e}); A = {ds.attrs['A']:.5g}, B = {ds.attrs['B']:.5g} "
               f"({ds.attrs['ab_source']}, {ds.attrs['coefficient_units']})")
+        if ds.attrs.get("x_inf_warning"):
+            LOG.warning("%s", ds.attrs["x_inf_warning"])
+            print(f"WARNING: {ds.attrs['x_inf_warning']}")
     print(summary_line(ds))
     print(f"written {out}")
     sys.stdout.flush()
@@ -57,6 +61,8 @@ def register(subparsers) -> None:
     p.add_argument("--n-particles", type=int, metavar="N", help="particles in the initial column")
     p.add_argument("--ab-source", choices=["paper", "computed", "user"], help="where A and B of eq 36 come from")
     p.add_argument("--coefficients", metavar="COEFFS.csv", help="coefficients.csv of `granudep regress` (computed)")
+    p.add_argument("--coefficient-units", choices=["normalised", "dimensional"],
+                   help="read A, B as normalised ((hu)_C = p0 (A[x] + B), eq 36) or dimensional (m2/s)")
     p.add_argument("--x-inf-mode", choices=["self-consistent", "no-deposition", "user"], help="how x_inf in [x] is set")
     p.add_argument("--x-inf", type=float, metavar="X", help="x_inf in m from the back wall (x-inf-mode user)")
     p.set_defaults(func=_run)
