@@ -76,7 +76,7 @@ rule figure_reading_matrix:
     input:
         f"{RESULTS}/compare/reading_matrix.csv",
     output:
-        report(EXTRA_FIGURES["reading-matrix"], caption="../report/reading_matrix.rst", category="Depth-averaged model"),
+        report(EXTRA_FIGURES["reading-matrix"], caption="../report/reading-matrix.rst", category="Depth-averaged model"),
     log:
         f"{LOGS}/figures/reading_matrix.log",
     benchmark:
@@ -94,7 +94,7 @@ rule figure_fig12_residuals:
         diagnosis=f"{RESULTS}/regression/diagnosis.csv",
         residuals=f"{RESULTS}/regression/residuals.csv",
     output:
-        report(EXTRA_FIGURES["fig12r"], caption="../report/fig12_residuals.rst", category="Deposition law"),
+        report(EXTRA_FIGURES["fig12r"], caption="../report/fig12r.rst", category="Deposition law"),
     log:
         f"{LOGS}/figures/fig12_residuals.log",
     benchmark:
