@@ -66,7 +66,7 @@ def _row(spec, ours, converged=float("nan"), dx=float("nan"), note="", our_sourc
     basis = "converged" if math.isfinite(_f(converged)) else ("paper resolution" if math.isfinite(_f(ours)) else "")
     v = verdict(use, paper, spec["test"], spec["tolerance"])
     if v == "not checkable" and not note:
-        note = "not measured: the output it is read from is missing"
+        note = "not run: the output it is read from is missing"
     return {"claim_id": claim_id or spec["claim_id"], "claim": claim or spec["claim"],
             "case": case if case is not None else (spec.get("case") or ""),
             "paper_value": paper, "unit": spec["unit"], "ours_paper_res": _f(ours), "ours_converged": _f(converged),
@@ -90,11 +90,14 @@ def _rest_ts(path) -> tuple[float, float]:
 
 
 def _failure_angle(path) -> tuple[float, float]:
+    """Failure-plane inclination from the *horizontal* (Rankine's θ_F = 45° + φ/2 is measured from the
+    horizontal, the plane of the minor principal stress σ3 being vertical): the static/moving boundary's
+    angle from the bed plus the slope angle θ (the boundary rises towards the back wall)."""
     import xarray as xr
     from .figures.isph2d import failure_plane_angle
     with xr.open_dataset(path) as ds:
         angle, _ = failure_plane_angle(ds, 1.0)
-        return angle, float(ds.attrs.get("dx", math.nan))
+        return angle + float(ds.attrs["theta_deg"]), float(ds.attrs.get("dx", math.nan))
 
 
 def _converged_file(converged_ref: pd.DataFrame | None, case: str) -> str | None:
@@ -150,7 +153,7 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
                 hit = t3c[(t3c["case"] == p.case_id) & np.isclose(t3c["x_norm"], xm)]
                 conv = _f(hit["t_s_critical"].iloc[0]) if len(hit) else float("nan")
             paper = float(p[f"xM_{xm}"])
-            note = "" if math.isfinite(ours) else ("2D run not in this workflow" if t3 is None or
+            note = "" if math.isfinite(ours) else ("not run: 2D run not in this workflow" if t3 is None or
                                                    not (t3["case"] == p.case_id).any() else f"no onset ({status})")
             if math.isfinite(ours):
                 note = (f"onset rule; Fig 9 fit intercept {fit:.2f} ({100 * (fit - paper) / paper:+.0f} %)"
@@ -172,7 +175,7 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
             if t5c is not None and (t5c["case"] == p.case_id).any():
                 conv = _f(t5c[t5c["case"] == p.case_id].iloc[0][q])
             note = (f"fit R² {r2:.2f}; if the printed value were dimensional, {q}/p0 = {alt:.4f}"
-                    if math.isfinite(ours) else "2D run of this geometry not in this workflow")
+                    if math.isfinite(ours) else "not run: 2D run of this geometry not in this workflow")
             rows.append(_row(specs[f"table5_{q}"], ours, conv, note=note, paper=float(p[q]), case=p.case_id,
                              claim=f"{q} of eq 36 ({p.case_id}, a = {p.a:g})", claim_id=f"table5_{p.case_id}_{q}",
                              our_source="regression/table5_comparison.csv"))
@@ -187,8 +190,8 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
     if cf:
         conv, dx = _failure_angle(cf)
     rows.append(_row(spec, ours, conv, 1e3 * dx, our_source=f"isph/{spec['case']}.nc" + (f"; {cf}" if cf else ""),
-                     note="from the bed, static/moving boundary at t_s = 1 (paper's method not stated); "
-                          "Rankine 45° + φ/2 = 57.75°"))
+                     note="from the horizontal (= from the bed + θ), static/moving boundary in the column at t_s = 1 "
+                          "(the paper does not say how it measured it); Rankine 45° + φ/2 = 57.75°"))
     for cid in [k for k in specs if k.startswith("rest_time_")]:
         spec = specs[cid]
         f = _isph_file(root, spec["case"])
@@ -200,7 +203,7 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
             conv, dx = _rest_ts(cf)
         rows.append(_row(spec, ours, conv, 1e3 * dx, our_source=f"isph/{spec['case']}.nc" + (f"; {cf}" if cf else ""),
                          note="time to rest: every particle < 0.1 m/s for 0.1 s" if f.is_file()
-                         else "2D run not in this workflow"))
+                         else "not run: 2D run not in this workflow"))
 
     # --- R² of the fits ---------------------------------------------------------------------------
     crit = _read(root / "regression" / "critical.csv")

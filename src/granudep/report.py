@@ -571,6 +571,22 @@ def caption_numbers(results, convergence_dx=None) -> dict:
     else:
         nums["figA2"] = missing("wm/")
     nums["figA1"] = nums["figA2"]
+    mxm = _read_csv(root / "compare" / "reading_matrix_maxima.csv")
+    if mxm is not None and len(mxm):
+        sel = mxm[mxm["measure"] == "2d"] if "measure" in mxm else mxm
+        nums["readingmatrix"] = "; ".join(
+            f"{r.reading} vs {r.reference}: largest runout error {100 * r.max_runout_error_nodep:.0f} % without, "
+            f"{100 * r.max_runout_error_dep:.0f} % with deposition; flow time {100 * r.max_flow_time_error_nodep:.0f} % "
+            f"/ {100 * r.max_flow_time_error_dep:.0f} %" for r in sel.itertuples())
+    else:
+        nums["readingmatrix"] = missing("compare/reading_matrix_maxima.csv")
+    dgs = _read_csv(root / "regression" / "diagnosis_summary.csv")
+    if dgs is not None and len(dgs):
+        nums["diagnosis"] = "; ".join(f"{r['variant']}: median R² {_fmt(r['r2_median'], '.2f')}, "
+                                      f"{int(r['cases_r2_ge_0.8'])}/{int(r['cases'])} cases with R² ≥ 0.8"
+                                      for _, r in dgs.iterrows())
+    else:
+        nums["diagnosis"] = missing("regression/diagnosis_summary.csv")
     sens = _read_csv(root / "sensitivity" / "sensitivity.csv")
     if sens is not None and len(sens) and "final_runout_norm" in sens:
         parts = []
