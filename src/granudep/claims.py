@@ -265,8 +265,12 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
             rows.append(_row(spec, float("nan")))
             continue
         sel = mx[(mx["measure"] == "2d")]
-        paper_ref = sel[sel["reference"].str.startswith("2D paper resolution")]
-        conv_rows = sel[~sel["reference"].str.startswith("2D paper resolution") & sel["reference"].str.startswith("2D")]
+        # the workflow's own 2D runs (reference_2d.csv) vs the converged/finest ones (reference_converged.csv)
+        ref_own = _read(root / "compare" / "reference_2d.csv")
+        own = set(ref_own["reference"]) if ref_own is not None and "reference" in ref_own else set()
+        conv_labels = set(conv_ref["reference"]) if conv_ref is not None and "reference" in conv_ref else set()
+        paper_ref = sel[sel["reference"].isin(own)]
+        conv_rows = sel[sel["reference"].isin(conv_labels)]
 
         def value(frame, reading):
             g = frame[frame["reading"] == reading]
@@ -276,13 +280,13 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
             if q is None:
                 return float(np.nanmax([g["runout_max_reduction"], g["flow_time_max_reduction"]]))
             return float(g[f"max_{q}_error_{kind}"])
-        ours, conv = value(paper_ref, default), value(conv_rows, default)
+        ours, conv_v = value(paper_ref, default), value(conv_rows, default)
         others = ", ".join(f"{r}: {value(paper_ref, r) * 100:.0f} %" for r in sorted(set(sel["reading"])) if r != default)
         dx = float(conv_rows["reference"].str.extract(r"dx = ([0-9.]+)")[0].astype(float).iloc[0]) \
             if len(conv_rows) and conv_rows["reference"].str.contains("dx = ").any() else float("nan")
         what = "reduction of the largest |error| (runout or flow time, the larger)" if q is None else \
             f"largest |{q.replace('_', ' ')} error| over the DA cases"
-        rows.append(_row(spec, ours, conv, dx,
+        rows.append(_row(spec, ours, conv_v, dx,
                          note=f"{what}; A, B reading '{default}'; other readings (paper resolution): {others}; "
                               "the paper's reference is Farin et al. (2014) measurements, ours the 2D ISPH runs",
                          our_source="compare/reading_matrix_maxima.csv"))

@@ -108,3 +108,28 @@ def test_x_inf_fall_back_when_the_front_jumps():
 def test_x_inf_continuous_has_no_warning():
     res = self_consistent(lambda x: _rec(1.1 - 0.5 * x), 1.0, 0.2, tol=1e-6, residual_tol=0.02, max_iter=50)
     assert res.warning == "" and res.x_inf == pytest.approx(1.1 / 1.5, abs=1e-4)
+
+
+def test_reading_matrix_and_residual_figures(tmp_path):
+    from granudep.cli import main
+    from granudep.regress.diagnose import diagnose, variant_summary
+    ref = pd.DataFrame({"case": ["1D-A70"], "final_runout_norm": [1.5], "flow_time": [1.0],
+                        "provenance": ["planted"], "reference": ["2D planted (dx = 4 mm)"]})
+    t = compare([_da("none", 2.25, 1.5), _da("computed", 2.1, 1.4), _da("paper", 1.8, 1.2)], [ref])
+    mpath = tmp_path / "matrix.csv"
+    reading_matrix(t).to_csv(mpath, index=False)
+    assert main(["figure", "reading-matrix", "-o", str(tmp_path / "rm.png"), str(mpath)]) == 0
+    assert (tmp_path / "rm.png").stat().st_size > 1000
+    sec = syn.save(syn.sections(), tmp_path / "T22-A70.nc")
+    table, resid = diagnose([sec])
+    assert {"baseline", "no gate", "fit onset", "onset 1 dx"} <= set(table.variant)
+    base = table[table.variant == "baseline"].iloc[0]
+    # the baseline refit is the regression's own fit: same sections, same onset rule
+    from granudep.regress.api import regress
+    co = regress([sec])["coefficients"].iloc[0]
+    assert base.A == pytest.approx(co.A, rel=1e-9) and base.r2 == pytest.approx(co.r2, rel=1e-9)
+    assert len(variant_summary(table)) == table.variant.nunique()
+    table.to_csv(tmp_path / "d.csv", index=False)
+    resid.to_csv(tmp_path / "r.csv", index=False)
+    assert main(["figure", "fig12r", "-o", str(tmp_path / "r.png"), str(tmp_path / "d.csv"),
+                 str(tmp_path / "r.csv")]) == 0

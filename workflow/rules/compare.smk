@@ -17,7 +17,8 @@ READINGS = list(_CMP.get("readings", ["computed", "paper", "paper-dimensional"])
 DEFAULT_READING = config["da"]["ab_source"]
 REFERENCE_DX = _REF.get("dx")
 REFERENCE_EXTRA = sorted({p for pat in _REF.get("runs", []) for p in _glob.glob(pat)})
-PAPER_REFERENCE_LABEL = "2D paper resolution"
+# the paper's resolution is dx = 4 mm (Appendix); a coarser workflow (CI) says so in its label
+PAPER_REFERENCE_LABEL = "2D paper resolution" if abs(config["isph"]["dx"] - 0.004) < 1e-9 else "2D workflow resolution"
 CONVERGED_REFERENCE_LABEL = "2D converged" if REFERENCE_DX is not None else "2D finest available"
 
 

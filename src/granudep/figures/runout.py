@@ -60,7 +60,10 @@ def fig15(da_runs, reference_runs=(), reference_tables=(), flow_time_tol: float 
         ax = axes.ravel()[k]
         meta = (by_case.get(case) or refs.get(case))[0].attrs
         L0 = float(meta["L0"])
-        for ds in refs.get(case, []):
+        ref_runs = sorted(refs.get(case, []), key=lambda d: -float(d.attrs.get("dx", np.nan)))
+        ref_cols = ["k"] if len(ref_runs) <= 1 else [str(0.65 * (1 - j / (len(ref_runs) - 1)))
+                                                     for j in range(len(ref_runs))]  # finer = darker
+        for ds, rc in zip(ref_runs, ref_cols):
             t = ds["time"].values
             front = ds["front_position"].values
             status = str(ds.attrs.get("status", "ok"))
@@ -72,15 +75,16 @@ def fig15(da_runs, reference_runs=(), reference_tables=(), flow_time_tol: float 
             ok = np.isfinite(front)
             env = np.full_like(front, np.nan)
             env[ok] = np.maximum.accumulate(front[ok])
+            dxmm = 1e3 * float(ds.attrs.get("dx", np.nan))
             if np.any(env[ok] > front[ok] + 1e-9):
-                ax.plot(t, (front - L0) / L0, color="0.55", lw=0.7, label="2D raw attached front (tip detaches)")
-            ax.plot(t, (env - L0) / L0, color="k", lw=1.8,
-                    label=f"2D ISPH (dx = {float(ds.attrs.get('dx', np.nan)):g} m){extra}")
+                ax.plot(t, (front - L0) / L0, color=rc, lw=0.5, ls=":",
+                        label=f"2D raw attached front, dx = {dxmm:g} mm (tip detaches)")
+            ax.plot(t, (env - L0) / L0, color=rc, lw=1.8, label=f"2D ISPH (dx = {dxmm:g} mm){extra}")
             if "front_v99" in ds:
-                ax.plot(t, (ds["front_v99"].values - L0) / L0, color="k", lw=0.9, ls="-.",
-                        label="2D, 1 % volume front")
+                ax.plot(t, (ds["front_v99"].values - L0) / L0, color=rc, lw=0.9, ls="-.",
+                        label=f"2D, 1 % volume front (dx = {dxmm:g} mm)")
             if not extra:
-                ax.axvline(flow_time(t, front, flow_time_tol), color="k", lw=0.8, ls=":")
+                ax.axvline(flow_time(t, front, flow_time_tol), color=rc, lw=0.8, ls=":")
         for ds in sorted(by_case.get(case, []), key=lambda d: -int(d.attrs["deposition"])):
             st = DA_STYLE[int(ds.attrs["deposition"])]
             r = np.asarray(ds["runout"].values, float)
@@ -103,12 +107,12 @@ def fig15(da_runs, reference_runs=(), reference_tables=(), flow_time_tol: float 
         ax.set_ylim(bottom=0)
         ax.set_xlim(left=0)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
+        ax.legend(fontsize=6, loc="best")
     hide_unused(axes, len(names))
     defs = "; ".join(sorted({f"{src} {front_note(th)}" for src, th in thresholds}))
     note(fig, f"ΔL = x_front − L0 (from the gate). {defs}. Curves are the monotone envelope of the front (the "
               "furthest front reached so far): the attached front steps back when a thin tip detaches from the main "
-              "mass (raw 2D front in grey where it does). Dotted verticals: flow time t_F (front moves "
+              "mass (raw 2D front dotted where it does). 2D runs shaded by resolution (finer = darker). Dotted verticals: flow time t_F (front moves "
               f"< {1e3 * flow_time_tol:.0f} mm afterwards). {NO_FARIN}.")
     return fig
 
