@@ -100,6 +100,9 @@ def to_dataset(cfg, rec, *, deposition: bool, physics, A=float("nan"), B=float("
         "x_inf_iterations": int(iters), "x_inf_residual": float(resid),
         "x_inf_warning": x_warn,
         "A": float(A), "B": float(B), "ab_source": ab_source,
+        # where A[x] + B = 0: beyond it (hu)_C <= 0 and eq 34 deposits nothing (alpha = 0); a front that
+        # escapes past it runs out freely, which makes F(x_inf) jump (docs/paper-notes.md, "x_inf fall-back")
+        "x_norm_zero_critical": float(-B / A) if deposition and A != 0 and math.isfinite(A) else float("nan"),
         "coefficient_units": cfg.deposition.coefficient_units, "p0": cfg.p0, "t_c": t_c,
         "k_active": physics.k_active, "k_passive": physics.k_passive, "earth_pressure": num.earth_pressure,
         "phi_internal_deg": cfg.material.phi_internal_deg, "phi_basal_deg": cfg.material.phi_basal_deg,
