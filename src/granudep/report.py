@@ -219,12 +219,23 @@ def section_regression_diagnosis(path) -> str:
     df = _read_csv(path)
     if df is None:
         return "\n".join(out) + _missing("regression diagnosis", path)
-    out.append(f"Source: `{path}`. Each variant refits eq 36 with one choice changed; the residual plot is "
-               "`figures/fig12_residuals.png`.\n")
-    out.append(md_table(df, {"case": ("case", ""), "a": ("a", ".3g"), "theta_deg": ("θ", ".0f"), "variant": ("variant", ""),
-                             "n_sections": ("n", ""), "A": ("A", ".4f"), "B": ("B", ".4f"), "r2": ("R²", ".3f"),
-                             "r2_quadratic": ("R² quadratic", ".3f"), "rms_residual": ("RMS resid.", ".4f"),
-                             "note": ("note", "")}))
+    out.append(f"Source: `{path}` (every variant and case). Each variant refits eq 36 with one method choice "
+               "changed; residual plot `figures/fig12_residuals.png`. R² quadratic: a parabola in [x] through the "
+               "same points (how much of the misfit is curvature rather than scatter).\n")
+    summ = _read_csv(Path(path).with_name("diagnosis_summary.csv"))
+    if summ is not None:
+        out.append("**Per variant** (over the cases; A at θ = 22°: range and largest step between neighbouring a):\n")
+        out.append(md_table(summ, {"variant": ("variant", ""), "cases": ("cases", ""), "r2_median": ("median R²", ".3f"),
+                                   "r2_min": ("min R²", ".3f"), "cases_r2_ge_0.8": ("cases R² ≥ 0.8", ""),
+                                   "r2_quadratic_median": ("median R² quadratic", ".3f"),
+                                   "A_22_range": ("A at 22°", ""), "A_22_largest_step": ("largest A step", ".4f")}))
+    show = df[df["variant"].isin(["baseline", "no gate"])]
+    out.append("\n**Per case, baseline and without the gate section [x] = 0:**\n")
+    out.append(md_table(show, {"case": ("case", ""), "a": ("a", ".3g"), "theta_deg": ("θ", ".0f"), "variant": ("variant", ""),
+                               "n_sections": ("n", ""), "A": ("A", ".4f"), "B": ("B", ".4f"), "r2": ("R²", ".3f"),
+                               "r2_quadratic": ("R² quadratic", ".3f"), "rms_residual": ("RMS resid.", ".4f"),
+                               "y_range": ("range of (hu)_C/p0", ".4f"), "x_norm_zero": ("[x] where A[x]+B = 0", ".2f"),
+                               "note": ("note", "")}))
     out.append("")
     return "\n".join(out)
 

@@ -16,6 +16,9 @@ time, from the same monitoring sections:
   (section placement: the thin tail sets x∞);
 * ``W_M = k dx``: hu/p0 from the W_M sensitivity file at the same onset (k = 1, 3, 4).
 
+Beside A, B, R²: the mean and range of the fitted (hu)_C/p0 (a small range next to the RMS residual
+means a line in [x] has little to explain) and ``x_norm_zero`` = −B/A, where the line crosses zero.
+
 Each row gives A, B, R² of the line, R² of a quadratic in [x] (how much a curve would explain), the
 RMS residual of the line and the number of sections. The residuals of every case's baseline are
 returned for the Fig 12 residual plot.
@@ -34,7 +37,7 @@ from .config import RegressConfig
 from .critical import growth_fit, linear_fit, onset_time, value_at
 
 DIAGNOSIS_COLUMNS = ["case", "theta_deg", "a", "variant", "n_sections", "A", "B", "r2", "r2_quadratic",
-                     "rms_residual", "x_norm_used", "note"]
+                     "rms_residual", "y_mean", "y_range", "x_norm_zero", "x_norm_used", "note"]
 
 
 def _quad_r2(x, y) -> float:
@@ -52,12 +55,16 @@ def _fit_row(case, theta, a, variant, x, y, note="", min_sections=3) -> tuple[di
     x, y = x[ok], y[ok]
     row = {"case": case, "theta_deg": theta, "a": a, "variant": variant, "n_sections": int(x.size),
            "A": math.nan, "B": math.nan, "r2": math.nan, "r2_quadratic": math.nan, "rms_residual": math.nan,
+           "y_mean": float(np.mean(y)) if y.size else math.nan,
+           "y_range": float(np.ptp(y)) if y.size else math.nan, "x_norm_zero": math.nan,
            "x_norm_used": ";".join(f"{v:.2g}" for v in x), "note": note}
     resid = np.full(x.size, np.nan)
     if x.size >= min_sections:
         A, B, r2, _ = linear_fit(x, y)
         resid = y - (A * x + B)
-        row.update(A=A, B=B, r2=r2, r2_quadratic=_quad_r2(x, y), rms_residual=float(np.sqrt(np.mean(resid ** 2))))
+        row.update(A=A, B=B, r2=r2, r2_quadratic=_quad_r2(x, y), rms_residual=float(np.sqrt(np.mean(resid ** 2))),
+                   # where the line's (hu)_C crosses zero (eq 34 deposits nothing beyond it)
+                   x_norm_zero=float(-B / A) if A != 0 else math.nan)
     return row, np.column_stack([x, y, resid]) if x.size else np.zeros((0, 3))
 
 
