@@ -282,8 +282,13 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
             return float(g[f"max_{q}_error_{kind}"])
         ours, conv_v = value(paper_ref, default), value(conv_rows, default)
         others = ", ".join(f"{r}: {value(paper_ref, r) * 100:.0f} %" for r in sorted(set(sel["reading"])) if r != default)
-        dx = float(conv_rows["reference"].str.extract(r"dx = ([0-9.]+)")[0].astype(float).iloc[0]) \
-            if len(conv_rows) and conv_rows["reference"].str.contains("dx = ").any() else float("nan")
+        # dx of the converged run of the case where the maximum occurs (the reference may mix resolutions)
+        dx = float("nan")
+        if q is not None and len(conv_rows) and conv_ref is not None and "dx" in conv_ref:
+            g = conv_rows[conv_rows["reading"] == default]
+            at = str(g[f"max_{q}_case_{kind}"].iloc[0]) if len(g) else ""
+            hit = conv_ref[conv_ref["case"] == at]
+            dx = 1e3 * float(hit["dx"].iloc[0]) if len(hit) else float("nan")
         what = "reduction of the largest |error| (runout or flow time, the larger)" if q is None else \
             f"largest |{q.replace('_', ' ')} error| over the DA cases"
         rows.append(_row(spec, ours, conv_v, dx,
