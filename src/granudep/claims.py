@@ -110,6 +110,16 @@ def _converged_file(converged_ref: pd.DataFrame | None, case: str) -> str | None
     return None
 
 
+def _converged_dx_mm(converged_ref: pd.DataFrame | None, case: str) -> float:
+    """dx (mm) of the converged reference run of 2D case ``case`` (NaN if none)."""
+    if converged_ref is None or "dx" not in converged_ref:
+        return float("nan")
+    for _, r in converged_ref.iterrows():
+        if f"({case}," in str(r.get("provenance", "")):
+            return 1e3 * float(r["dx"])
+    return float("nan")
+
+
 def acceleration_change(dep_path, nodep_path) -> float:
     """Largest |runout(dep) − runout(no dep)| up to the time the no-deposition front speed peaks,
     over the final no-deposition runout (the claim "runout does not change in the acceleration phase")."""
@@ -158,7 +168,8 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
             if math.isfinite(ours):
                 note = (f"onset rule; Fig 9 fit intercept {fit:.2f} ({100 * (fit - paper) / paper:+.0f} %)"
                         if math.isfinite(fit) else "onset rule; no Fig 9 fit")
-            rows.append(_row(specs["table3"], ours, conv, note=note, paper=paper, case=p.case_id,
+            rows.append(_row(specs["table3"], ours, conv, _converged_dx_mm(conv_ref, p.case_id), note=note,
+                             paper=paper, case=p.case_id,
                              claim=f"(t_s)_C at [x] = {xm}", claim_id=f"table3_{p.case_id}_x{xm}",
                              our_source="regression/table3_comparison.csv"))
 
@@ -176,7 +187,9 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
                 conv = _f(t5c[t5c["case"] == p.case_id].iloc[0][q])
             note = (f"fit R² {r2:.2f}; if the printed value were dimensional, {q}/p0 = {alt:.4f}"
                     if math.isfinite(ours) else "not run: 2D run of this geometry not in this workflow")
-            rows.append(_row(specs[f"table5_{q}"], ours, conv, note=note, paper=float(p[q]), case=p.case_id,
+            run2d = f"T{p.theta_deg:g}-{p.case_id.split('-', 1)[1]}"
+            rows.append(_row(specs[f"table5_{q}"], ours, conv, _converged_dx_mm(conv_ref, run2d), note=note,
+                             paper=float(p[q]), case=p.case_id,
                              claim=f"{q} of eq 36 ({p.case_id}, a = {p.a:g})", claim_id=f"table5_{p.case_id}_{q}",
                              our_source="regression/table5_comparison.csv"))
 

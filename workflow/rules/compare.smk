@@ -142,3 +142,64 @@ rule compare:
         "granudep compare {input.da} --readings {input.readings} --default-reading {params.default_reading}"
         " --reference {input.reference} {input.converged} {input.extra} -o {output.comparison}"
         " --matrix {output.matrix} --maxima {output.maxima} > {log} 2>&1"
+
+
+# Regression on the converged reference (claims scorecard, column "ours converged"): the runs of
+# compare.reference that `granudep reference` selects (per case the run at compare.reference.dx, or
+# the finest) and that are finer than this workflow's own run get monitoring sections and the eq-36
+# regression, so Table 3 / Table 5 entries of those cases are also read at that resolution.
+def _converged_runs():
+    if not REFERENCE_EXTRA:
+        return {}
+    from granudep.compare import select_reference_runs
+    own = [f"{RESULTS}/isph/{REFERENCE_2D[c]}.nc" for c in DA_CASES]
+    have = [p for p in own if os.path.exists(p)]
+    chosen = select_reference_runs(REFERENCE_EXTRA + have, REFERENCE_DX)
+    return {os.path.splitext(os.path.basename(p))[0]: p for p in chosen if p in REFERENCE_EXTRA}
+
+
+CONVERGED_RUNS = _converged_runs()
+CONVERGED_REGRESSION = f"{RESULTS}/converged/regression"
+
+
+rule monitor_converged:
+    input:
+        run=lambda wc: CONVERGED_RUNS[wc.run],
+    output:
+        f"{RESULTS}/converged/sections/{{run}}.nc",
+    wildcard_constraints:
+        run="[A-Za-z0-9_.-]+",
+    params:
+        width_factor=config["monitor"]["width_factor"],
+    log:
+        f"{LOGS}/converged/monitor_{{run}}.log",
+    benchmark:
+        f"{BENCH}/converged/monitor_{{run}}.tsv"
+    threads: 1
+    resources:
+        runtime=60,
+        mem_mb=8000,
+    shell:
+        "NUMBA_NUM_THREADS={threads} granudep monitor {input.run} --width-factor {params.width_factor}"
+        " -o {output} > {log} 2>&1"
+
+
+rule regress_converged:
+    input:
+        sections=[f"{RESULTS}/converged/sections/{r}.nc" for r in CONVERGED_RUNS],
+    output:
+        table3=f"{CONVERGED_REGRESSION}/table3_comparison.csv",
+        table5=f"{CONVERGED_REGRESSION}/table5_comparison.csv",
+        coefficients=f"{CONVERGED_REGRESSION}/coefficients.csv",
+    params:
+        outdir=CONVERGED_REGRESSION,
+    log:
+        f"{LOGS}/converged/regress.log",
+    benchmark:
+        f"{BENCH}/converged/regress.tsv"
+    threads: 1
+    resources:
+        runtime=15,
+        mem_mb=2000,
+    shell:
+        "granudep regress {input.sections} -o {params.outdir} > {log} 2>&1"

@@ -11,6 +11,7 @@ rule summary:
         converged=f"{RESULTS}/compare/reference_converged.csv",
         diagnosis=DIAGNOSIS_OUTPUTS["table"],
         extra_figures=list(EXTRA_FIGURES.values()),
+        converged_regression=[f"{CONVERGED_REGRESSION}/table3_comparison.csv"] if CONVERGED_RUNS else [],
         verification=[f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"],
         figures=[figure_path(n) for n in ACTIVE_FIGURES],
         # the studies beyond the paper are separate targets: their sections are filled when their
@@ -33,6 +34,7 @@ rule summary:
         convergence_n=" ".join(str(n) for n in config["convergence"]["da_n_particles"]),
         sensitivity=f"{RESULTS}/sensitivity/sensitivity.csv",
         results=RESULTS,
+        converged=f"--converged-regression {CONVERGED_REGRESSION}" if CONVERGED_RUNS else "",
     log:
         f"{LOGS}/summary.log",
     benchmark:
@@ -48,6 +50,7 @@ rule summary:
         " --convergence-n {params.convergence_n} --sensitivity {params.sensitivity}"
         " --caption-numbers {output.captions} --results {params.results}"
         " --matrix {input.matrix} --maxima {input.maxima} --diagnosis {input.diagnosis} --claims {output.claims}"
+        " {params.converged}"
         " > {log} 2>&1"
 
 
