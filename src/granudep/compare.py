@@ -43,8 +43,15 @@ PAPER_MAX_ERRORS = {
     "deposition": {"runout": 0.17, "runout_a": 0.45, "flow_time": 0.69, "flow_time_a": 1.24},
 }
 
+#: the robust front measures (granudep.front.front_measures) carried by 2D and DA files, short names
+MEASURES = ("2d", "5mm", "v99", "tail")
+#: the measure whose runout the reading matrix and the scorecard read first (the paper's front is a
+#: thickness threshold; the 1 % volume front does not jump when a thin tip detaches)
+MAIN_MEASURES = ("2d", "v99")
+
 REFERENCE_COLUMNS = ("case", "a", "theta_deg", "final_runout_norm", "flow_time", "flow_time_norm",
-                     "front_definition", "provenance", "note")
+                     "front_definition", "provenance", "note", "dx", "time_to_rest",
+                     *[f"final_runout_norm_{m}" for m in MEASURES], "flow_time_v99", "path")
 #: default flow-time tolerance (m), the shared definition's default (docs/paper-notes.md)
 FLOW_TIME_TOL = 1e-3
 
@@ -123,7 +130,10 @@ def reference_row(run, tol: float = FLOW_TIME_TOL) -> dict:
                     "bounds (note column)", where, time[-1])
     dx = ds.attrs.get("dx")
     dx_text = f", dx={float(dx):g} m" if dx is not None else ""
-    return {
+    robust = _robust_fronts(ds, time, L0, tol)
+    return {**robust, "dx": float(dx) if dx is not None else float("nan"),
+            "path": "" if isinstance(run, xr.Dataset) else str(run),
+            "time_to_rest": float(ds["time_to_rest"].values) if "time_to_rest" in ds else float("nan"),
         "case": case, "a": a, "theta_deg": theta,
         "final_runout_norm": (x_final - L0) / L0,
         "flow_time": tf, "flow_time_norm": tf / tc,
@@ -133,12 +143,70 @@ def reference_row(run, tol: float = FLOW_TIME_TOL) -> dict:
     }
 
 
-def reference_from_isph(runs: Iterable, tol: float = FLOW_TIME_TOL) -> pd.DataFrame:
-    """Reference table (:data:`REFERENCE_COLUMNS`) from 2D ISPH runs."""
+def _robust_fronts(ds: xr.Dataset, time: np.ndarray, L0: float, tol: float) -> dict:
+    """final_runout_norm_{2d,5mm,v99,tail} and the flow time of the 1 % volume front, from the
+    ``final_front_*`` / ``front_*`` variables of a 2D or DA file (NaN where the file predates them)."""
+    out = {}
+    for m in MEASURES:
+        name = f"final_front_{m}"
+        x = float(ds[name].values) if name in ds else float("nan")
+        out[f"final_runout_norm_{m}"] = (x - L0) / L0
+    out["flow_time_v99"] = _flow_time(time, np.asarray(ds["front_v99"].values, float), tol) \
+        if "front_v99" in ds else float("nan")
+    return out
+
+
+def _dx_label(dxs) -> str:
+    vals = sorted({round(1e3 * float(d), 6) for d in dxs if d is not None and math.isfinite(float(d))})
+    return "dx not recorded" if not vals else "dx = " + " / ".join(f"{v:g}" for v in vals) + " mm"
+
+
+def reference_from_isph(runs: Iterable, tol: float = FLOW_TIME_TOL, label: str | None = None) -> pd.DataFrame:
+    """Reference table (:data:`REFERENCE_COLUMNS`) from 2D ISPH runs.
+
+    ``label`` names the reference source (e.g. "2D paper resolution"); the table's ``reference``
+    column is then the label with the runs' dx ("2D paper resolution (dx = 4 mm)"), so every number
+    read against it is labelled with its resolution.
+    """
     rows = [reference_row(r, tol) for r in runs]
     if not rows:
         raise ConfigError("reference: no ISPH run given")
-    return pd.DataFrame(rows, columns=list(REFERENCE_COLUMNS))
+    table = pd.DataFrame(rows, columns=list(REFERENCE_COLUMNS))
+    if label:
+        table["reference"] = f"{label} ({_dx_label(table['dx'])})"
+    return table
+
+
+def select_reference_runs(runs: Iterable, dx: float | None = None) -> list:
+    """Per Table 5 case (matched by (a, θ)), the run at resolution ``dx`` (m), or the finest one.
+
+    The converged reference of the comparison (issue 13): until the convergence ladder names the
+    converged dx, it is the finest-resolution run available for each case. A case with no run at the
+    requested ``dx`` keeps its finest run, with a warning. Returns the selected paths/datasets.
+    """
+    by_case: dict[str, list] = {}
+    for r in runs:
+        ds, name = _as_dataset(r)
+        if str(ds.attrs.get("status", "ok")).lower().startswith("failed"):
+            LOG.warning("reference %s: failed run skipped", name)
+            continue
+        a = float(ds.attrs["H0"]) / float(ds.attrs["L0"])
+        case = match_table5(a, float(ds.attrs["theta_deg"])) or str(ds.attrs.get("case", name))
+        by_case.setdefault(case, []).append((float(ds.attrs.get("dx", math.nan)), r))
+    chosen = []
+    for case, items in sorted(by_case.items()):
+        items = sorted(items, key=lambda t: (not math.isfinite(t[0]), t[0]))
+        pick = items[0]
+        if dx is not None:
+            hit = [t for t in items if math.isfinite(t[0]) and math.isclose(t[0], dx, rel_tol=1e-6)]
+            if hit:
+                pick = hit[0]
+            else:
+                LOG.warning("reference %s: no run at dx = %g m; the finest (dx = %g m) is used", case, dx, pick[0])
+        chosen.append(pick[1])
+    if not chosen:
+        raise ConfigError("reference: no usable ISPH run given")
+    return chosen
 
 
 def load_reference(table, name: str | None = None) -> pd.DataFrame:
@@ -205,13 +273,40 @@ def da_summary(run) -> dict:
         out[key] = float(ds[key].values)
     out["a"] = float(ds.attrs["H0"]) / float(ds.attrs["L0"]) if {"H0", "L0"} <= set(ds.attrs) else float("nan")
     out["da_front_definition"] = front_definition(ds.attrs.get("front_depth_threshold"))
+    out["reading"] = da_reading(ds)
+    out["A"] = float(ds.attrs.get("A", math.nan)) if dep else float("nan")
+    out["B"] = float(ds.attrs.get("B", math.nan)) if dep else float("nan")
+    out["x_inf_warning"] = str(ds.attrs.get("x_inf_warning", "")) if dep else ""
+    time = np.asarray(ds["time"].values, dtype=float)
+    L0 = float(ds.attrs.get("L0", math.nan))
+    tol = float(ds.attrs.get("flow_time_tolerance", FLOW_TIME_TOL))
+    out.update(_robust_fronts(ds, time, L0, tol))
     return out
 
 
-COMPARE_COLUMNS = ("case", "a", "variant", "deposition", "reference", "provenance", "final_runout_norm",
+#: the A, B readings of the reading matrix (issue 13), by name
+READINGS = {"computed": "computed A, B (normalised)", "paper": "paper A, B normalised",
+            "paper-dimensional": "paper A, B dimensional", "computed-dimensional": "computed A, B dimensional",
+            "none": "no deposition"}
+
+
+def da_reading(ds: xr.Dataset) -> str:
+    """Which A, B reading a DA run used: a :data:`READINGS` key ("none" without deposition)."""
+    if not int(ds.attrs.get("deposition", 0)):
+        return "none"
+    src = str(ds.attrs.get("ab_source", "")).split(" ", 1)[0].strip().lower() or "unknown"
+    units = str(ds.attrs.get("coefficient_units", "normalised"))
+    return src if units == "normalised" else f"{src}-dimensional"
+
+
+COMPARE_COLUMNS = ("case", "a", "variant", "deposition", "reading", "A", "B", "reference", "provenance",
+                   "reference_dx", "final_runout_norm",
                    "reference_final_runout_norm", "runout_rel_error", "flow_time", "reference_flow_time",
                    "flow_time_norm", "reference_flow_time_norm", "flow_time_rel_error", "flow_time_basis",
-                   "da_front_definition", "reference_front_definition", "reference_note", "da_file")
+                   *[c for m in MEASURES for c in (f"final_runout_norm_{m}", f"reference_final_runout_norm_{m}",
+                                                   f"runout_rel_error_{m}")],
+                   "flow_time_v99", "reference_flow_time_v99", "flow_time_v99_rel_error",
+                   "da_front_definition", "reference_front_definition", "reference_note", "x_inf_warning", "da_file")
 
 
 def compare(da_runs: Iterable, references: Iterable) -> pd.DataFrame:
@@ -230,7 +325,7 @@ def compare(da_runs: Iterable, references: Iterable) -> pd.DataFrame:
         d = da_summary(run)
         match = ref[ref["case"] == d["case"]]
         if match.empty:
-            rows.append({**d, "reference": "no reference", "provenance": "no reference",
+            rows.append({**d, "reference": "no reference", "provenance": "no reference", "reference_dx": np.nan,
                          "reference_final_runout_norm": np.nan,
                          "runout_rel_error": np.nan, "reference_flow_time": np.nan,
                          "reference_flow_time_norm": np.nan, "flow_time_rel_error": np.nan,
@@ -242,7 +337,16 @@ def compare(da_runs: Iterable, references: Iterable) -> pd.DataFrame:
                 basis, err = "s", _rel(d["flow_time"], rft)
             else:
                 basis, err = "t/t_c", _rel(d["flow_time_norm"], rftn)
-            rows.append({**d, "reference": str(r["reference"]), "provenance": str(r["provenance"]),
+            robust = {}
+            for m in MEASURES:
+                rv = float(r.get(f"final_runout_norm_{m}", np.nan))
+                robust[f"reference_final_runout_norm_{m}"] = rv
+                robust[f"runout_rel_error_{m}"] = _rel(d[f"final_runout_norm_{m}"], rv)
+            rv99 = float(r.get("flow_time_v99", np.nan))
+            robust["reference_flow_time_v99"] = rv99
+            robust["flow_time_v99_rel_error"] = _rel(d["flow_time_v99"], rv99)
+            rows.append({**d, **robust, "reference": str(r["reference"]), "provenance": str(r["provenance"]),
+                         "reference_dx": float(r.get("dx", np.nan)),
                          "reference_final_runout_norm": float(r["final_runout_norm"]),
                          "runout_rel_error": _rel(d["final_runout_norm"], float(r["final_runout_norm"])),
                          "reference_flow_time": rft, "reference_flow_time_norm": rftn,
@@ -252,7 +356,10 @@ def compare(da_runs: Iterable, references: Iterable) -> pd.DataFrame:
     if not rows:
         raise ConfigError("compare: no DA run given")
     out = pd.DataFrame(rows)
-    return out[list(COMPARE_COLUMNS)].sort_values(["case", "reference", "deposition"], kind="stable",
+    for c in COMPARE_COLUMNS:
+        if c not in out.columns:
+            out[c] = np.nan
+    return out[list(COMPARE_COLUMNS)].sort_values(["case", "reference", "deposition", "reading"], kind="stable",
                                                   ignore_index=True)
 
 
@@ -298,6 +405,77 @@ def max_errors(table: pd.DataFrame) -> pd.DataFrame:
                          "paper_max_error": paper.get(q, np.nan), "paper_case_a": paper.get(f"{q}_a", np.nan)})
     return pd.DataFrame(rows, columns=["reference", "variant", "quantity", "max_abs_rel_error",
                                        "signed_error", "case", "a", "paper_max_error", "paper_case_a"])
+
+
+MATRIX_COLUMNS = ["case", "a", "reference", "reference_dx", "reading", "reading_label", "A", "B", "measure",
+                  "final_runout_norm", "final_runout_norm_nodep", "reference_final_runout_norm",
+                  "runout_error", "runout_error_nodep", "runout_improved",
+                  "flow_time", "flow_time_nodep", "reference_flow_time",
+                  "flow_time_error", "flow_time_error_nodep", "flow_time_improved", "x_inf_warning"]
+
+
+def reading_matrix(table: pd.DataFrame, measures: Iterable[str] = MAIN_MEASURES) -> pd.DataFrame:
+    """The reading matrix of issue 13: per (case, reference, A/B reading, front measure), the runout and
+    flow-time errors with deposition beside those without (the no-deposition run is shared by every
+    reading) and whether deposition improved them (smaller |error|).
+
+    ``measure`` "2d" is the default front (2 grain diameters, the ``final_runout_norm`` and
+    ``flow_time`` of the files); "v99" the 1 % volume front and its flow time. Rows only for the
+    readings present in ``table`` (a run per reading), never filled in.
+    """
+    t = table[table["reference"] != "no reference"]
+    rows = []
+    for (case, ref), g in t.groupby(["case", "reference"], sort=True):
+        nd = g[g["deposition"] == 0]
+        for reading, gr in g[g["deposition"] == 1].groupby("reading", sort=True):
+            r = gr.iloc[0]
+            n = nd.iloc[0] if len(nd) else None
+            for m in measures:
+                if m == "2d":
+                    cols = ("final_runout_norm", "reference_final_runout_norm", "runout_rel_error",
+                            "flow_time", "reference_flow_time", "flow_time_rel_error")
+                else:
+                    cols = (f"final_runout_norm_{m}", f"reference_final_runout_norm_{m}", f"runout_rel_error_{m}",
+                            f"flow_time_{m}", f"reference_flow_time_{m}", f"flow_time_{m}_rel_error")
+                fr, rfr, er, ft, rft, ef = cols
+
+                def get(row, c):
+                    return float(row[c]) if row is not None and c in row.index else float("nan")
+                row = {"case": case, "a": float(r["a"]), "reference": ref, "reference_dx": get(r, "reference_dx"),
+                       "reading": reading, "reading_label": READINGS.get(reading, reading),
+                       "A": get(r, "A"), "B": get(r, "B"), "measure": m,
+                       "final_runout_norm": get(r, fr), "final_runout_norm_nodep": get(n, fr),
+                       "reference_final_runout_norm": get(r, rfr),
+                       "runout_error": get(r, er), "runout_error_nodep": get(n, er),
+                       "flow_time": get(r, ft), "flow_time_nodep": get(n, ft), "reference_flow_time": get(r, rft),
+                       "flow_time_error": get(r, ef), "flow_time_error_nodep": get(n, ef),
+                       "x_inf_warning": str(r.get("x_inf_warning", "") or "")}
+                for q in ("runout", "flow_time"):
+                    e_d, e_n = row[f"{q}_error"], row[f"{q}_error_nodep"]
+                    row[f"{q}_improved"] = (abs(e_d) < abs(e_n)) if math.isfinite(e_d) and math.isfinite(e_n) else None
+                rows.append(row)
+    return pd.DataFrame(rows, columns=MATRIX_COLUMNS)
+
+
+def matrix_maxima(matrix: pd.DataFrame) -> pd.DataFrame:
+    """Per (reference, reading, measure): the largest |error| over the cases with and without
+    deposition, and the reduction (no deposition − deposition, in error units) — the paper's
+    "improves by up to 38 %" is 55 % − 17 % (runout) = 107 % − 69 % (flow time) = 38 points."""
+    rows = []
+    for (ref, reading, m), g in matrix.groupby(["reference", "reading", "measure"], sort=True):
+        row = {"reference": ref, "reading": reading, "reading_label": READINGS.get(reading, reading), "measure": m,
+               "n_cases": int(len(g))}
+        for q in ("runout", "flow_time"):
+            for kind, col in (("dep", f"{q}_error"), ("nodep", f"{q}_error_nodep")):
+                e = g[col].astype(float).abs()
+                ok = np.isfinite(e)
+                row[f"max_{q}_error_{kind}"] = float(e[ok].max()) if ok.any() else float("nan")
+                row[f"max_{q}_case_{kind}"] = str(g.loc[e[ok].idxmax(), "case"]) if ok.any() else ""
+            row[f"{q}_max_reduction"] = row[f"max_{q}_error_nodep"] - row[f"max_{q}_error_dep"]
+            imp = g[f"{q}_improved"].dropna()
+            row[f"{q}_improved_cases"] = f"{int(imp.astype(bool).sum())}/{len(imp)}"
+        rows.append(row)
+    return pd.DataFrame(rows)
 
 
 def _pct(x) -> str:

@@ -148,6 +148,98 @@ def section_compare(compare) -> str:
     return "\n".join(out)
 
 
+def section_reading_matrix(matrix, maxima) -> str:
+    """Reading matrix (issue 13): {A, B readings} × {deposition, none} against every reference."""
+    out = ["## Reading matrix: which A, B reading, which reference (Figs 15–16)\n"]
+    mt, mx = _read_csv(matrix), _read_csv(maxima)
+    if mt is None or mx is None:
+        return "\n".join(out) + _missing("reading matrix", matrix if mt is None else maxima)
+    out.append(f"Source: `{matrix}`, `{maxima}`. Readings: `computed` = our regression (normalised, eq 36), "
+               "`paper` = Table 5 read as normalised, `paper-dimensional` = Table 5 read as (hu)_C = A[x] + B in "
+               "m²/s. Each deposition run is paired with the same no-deposition run. Front `2d`: attached front "
+               "at 2 grain diameters (the paper's kind of front); `v99`: the point beyond which 1 % of the "
+               "deposit's volume lies (does not jump when a thin tip detaches); the same rule on the 2D and the "
+               "DA depth profile. Relative error = (DA − 2D)/2D.\n")
+    show = mt.copy()
+    for c in ("runout_error", "runout_error_nodep", "flow_time_error", "flow_time_error_nodep"):
+        show[c] = pd.to_numeric(show[c], errors="coerce") * 100
+    out.append(md_table(show, {"case": ("case", ""), "reference": ("reference", ""), "reading": ("A, B reading", ""),
+                               "measure": ("front", ""), "A": ("A", ".4f"), "B": ("B", ".4f"),
+                               "runout_error_nodep": ("runout err. no dep. %", "+.1f"),
+                               "runout_error": ("runout err. dep. %", "+.1f"), "runout_improved": ("improved", ""),
+                               "flow_time_error_nodep": ("t_F err. no dep. %", "+.1f"),
+                               "flow_time_error": ("t_F err. dep. %", "+.1f"), "flow_time_improved": ("improved", "")}))
+    out.append("\n**Largest |error| over the cases, per reading** (the paper's: 55 % / 107 % without, 17 % / 69 % "
+               "with deposition, against Farin et al. 2014; reduction = the paper's \"up to 38 %\")\n")
+    show = mx.copy()
+    for c in [c for c in show.columns if c.startswith("max_") and "error" in c] + \
+            ["runout_max_reduction", "flow_time_max_reduction"]:
+        show[c] = pd.to_numeric(show[c], errors="coerce") * 100
+    out.append(md_table(show, {"reference": ("reference", ""), "reading": ("A, B reading", ""), "measure": ("front", ""),
+                               "max_runout_error_nodep": ("runout no dep. %", ".1f"),
+                               "max_runout_error_dep": ("runout dep. %", ".1f"),
+                               "runout_max_reduction": ("runout reduction (points)", "+.1f"),
+                               "runout_improved_cases": ("runout improved", ""),
+                               "max_flow_time_error_nodep": ("t_F no dep. %", ".1f"),
+                               "max_flow_time_error_dep": ("t_F dep. %", ".1f"),
+                               "flow_time_max_reduction": ("t_F reduction (points)", "+.1f"),
+                               "flow_time_improved_cases": ("t_F improved", "")}))
+    warn = mt[mt["x_inf_warning"].fillna("").astype(str).str.len() > 0] if "x_inf_warning" in mt else mt.iloc[:0]
+    out.append("\n**x∞ (self-consistent fixed point)**: "
+               + ("every deposition run reached the fixed point within its tolerance.\n" if warn.empty else
+                  "**WARNING** — the fall-back rule gave x∞ for: " + "; ".join(
+                      f"{r.case} ({r.reading}): {r.x_inf_warning}" for r in
+                      warn.drop_duplicates(["case", "reading"]).itertuples()) + "\n"))
+    return "\n".join(out)
+
+
+def section_claims(card: pd.DataFrame | None) -> str:
+    """The claims scorecard (granudep.claims.scorecard)."""
+    from .claims import tally
+    out = ["## Claims scorecard: every quantitative claim of the paper\n"]
+    if card is None or card.empty:
+        return "\n".join(out) + "_Not available: the scorecard was not built._\n"
+    out.append(f"{tally(card)} of {len(card)} claims. Paper values from the paper's tables (Tables 3, 5) and "
+               "`granudep/data/paper_claims.csv` (with the section each comes from); ours read from the output named "
+               "in the last column. Verdict on the converged value where it exists (its dx in column 'dx'), else on "
+               "the paper-resolution one; test and tolerance as listed (fixed before reading our numbers). "
+               "'–' in 'ours converged': not run.\n")
+    out.append(md_table(card, {"claim_id": ("id", ""), "claim": ("claim", ""), "case": ("case", ""),
+                               "paper_value": ("paper", ".4g"), "ours_paper_res": ("ours (paper res.)", ".4g"),
+                               "ours_converged": ("ours (converged)", ".4g"), "converged_dx_mm": ("dx (mm)", ".3g"),
+                               "verdict": ("verdict", ""), "test": ("test", ""), "tolerance": ("tol.", ".3g"),
+                               "note": ("measured cause / note", ""), "source": ("paper source", ""),
+                               "our_source": ("our source", "")}))
+    out.append("")
+    return "\n".join(out)
+
+
+def section_regression_diagnosis(path) -> str:
+    out = ["## Regression diagnosis: why R² of (hu)_C/p0 = A[x] + B is low\n"]
+    df = _read_csv(path)
+    if df is None:
+        return "\n".join(out) + _missing("regression diagnosis", path)
+    out.append(f"Source: `{path}` (every variant and case). Each variant refits eq 36 with one method choice "
+               "changed; residual plot `figures/fig12_residuals.png`. R² quadratic: a parabola in [x] through the "
+               "same points (how much of the misfit is curvature rather than scatter).\n")
+    summ = _read_csv(Path(path).with_name("diagnosis_summary.csv"))
+    if summ is not None:
+        out.append("**Per variant** (over the cases; A at θ = 22°: range and largest step between neighbouring a):\n")
+        out.append(md_table(summ, {"variant": ("variant", ""), "cases": ("cases", ""), "r2_median": ("median R²", ".3f"),
+                                   "r2_min": ("min R²", ".3f"), "cases_r2_ge_0.8": ("cases R² ≥ 0.8", ""),
+                                   "r2_quadratic_median": ("median R² quadratic", ".3f"),
+                                   "A_22_range": ("A at 22°", ""), "A_22_largest_step": ("largest A step", ".4f")}))
+    show = df[df["variant"].isin(["baseline", "no gate"])]
+    out.append("\n**Per case, baseline and without the gate section [x] = 0:**\n")
+    out.append(md_table(show, {"case": ("case", ""), "a": ("a", ".3g"), "theta_deg": ("θ", ".0f"), "variant": ("variant", ""),
+                               "n_sections": ("n", ""), "A": ("A", ".4f"), "B": ("B", ".4f"), "r2": ("R²", ".3f"),
+                               "r2_quadratic": ("R² quadratic", ".3f"), "rms_residual": ("RMS resid.", ".4f"),
+                               "y_range": ("range of (hu)_C/p0", ".4f"), "x_norm_zero": ("[x] where A[x]+B = 0", ".2f"),
+                               "note": ("note", "")}))
+    out.append("")
+    return "\n".join(out)
+
+
 def section_verification(paths) -> str:
     out = ["## Verification (analytic and conservation checks)\n"]
     if not paths:
@@ -361,7 +453,7 @@ def section_sensitivity(table) -> str:
 
 def build_summary(regression=None, compare=None, verification=(), benchmarks=None, figures=None,
                   output=None, convergence=None, sensitivity=None, convergence_dx=None,
-                  convergence_n=None) -> str:
+                  convergence_n=None, matrix=None, maxima=None, claims=None, diagnosis=None) -> str:
     """The Markdown summary text (see module docstring)."""
     out_dir = Path(output).parent if output is not None else None
     parts = [
@@ -373,9 +465,12 @@ def build_summary(regression=None, compare=None, verification=(), benchmarks=Non
         f"{100 * PAPER_MAX_ERRORS['no deposition']['flow_time']:.0f} % flow time, with deposition "
         f"{100 * PAPER_MAX_ERRORS['deposition']['runout']:.0f} % / {100 * PAPER_MAX_ERRORS['deposition']['flow_time']:.0f} %, "
         "against Farin et al. (2014) measurements, which are not available to us.\n",
+        section_claims(claims),
         section_table3(regression),
         section_table5(regression),
+        section_regression_diagnosis(diagnosis),
         section_compare(compare),
+        section_reading_matrix(matrix, maxima),
         section_verification(list(verification or [])),
         section_convergence(convergence, convergence_dx, convergence_n),
         section_sensitivity(sensitivity),
@@ -493,6 +588,22 @@ def caption_numbers(results, convergence_dx=None) -> dict:
     else:
         nums["figA2"] = missing("wm/")
     nums["figA1"] = nums["figA2"]
+    mxm = _read_csv(root / "compare" / "reading_matrix_maxima.csv")
+    if mxm is not None and len(mxm):
+        sel = mxm[mxm["measure"] == "2d"] if "measure" in mxm else mxm
+        nums["readingmatrix"] = "; ".join(
+            f"{r.reading} vs {r.reference}: largest runout error {100 * r.max_runout_error_nodep:.0f} % without, "
+            f"{100 * r.max_runout_error_dep:.0f} % with deposition; flow time {100 * r.max_flow_time_error_nodep:.0f} % "
+            f"/ {100 * r.max_flow_time_error_dep:.0f} %" for r in sel.itertuples())
+    else:
+        nums["readingmatrix"] = missing("compare/reading_matrix_maxima.csv")
+    dgs = _read_csv(root / "regression" / "diagnosis_summary.csv")
+    if dgs is not None and len(dgs):
+        nums["diagnosis"] = "; ".join(f"{r['variant']}: median R² {_fmt(r['r2_median'], '.2f')}, "
+                                      f"{int(r['cases_r2_ge_0.8'])}/{int(r['cases'])} cases with R² ≥ 0.8"
+                                      for _, r in dgs.iterrows())
+    else:
+        nums["diagnosis"] = missing("regression/diagnosis_summary.csv")
     sens = _read_csv(root / "sensitivity" / "sensitivity.csv")
     if sens is not None and len(sens) and "final_runout_norm" in sens:
         parts = []

@@ -63,9 +63,16 @@ def test_default_config_schedules_the_whole_paper(workdir):
     assert {f"figure_{f}" for f in FIGURES} <= set(jobs)
     # the extra studies are separate targets
     assert not any(r.startswith(("convergence", "sensitivity")) for r in jobs)
-    # paper resolution and the Table 5 A, B by default; every 2D run gets its dx
+    # paper resolution; every 2D run gets its dx
     assert out.count("--dx 0.004") == n2d
-    assert "--ab-source paper" in out and "--ab-source computed" not in out
+    # the chain is the default product (issue 13): the DA runs with deposition use our computed A, B;
+    # the reading matrix adds one run per case for Table 5 read as normalised and as dimensional
+    for case in ("1D-A30", "1D-A45", "1D-A70", "1D-A124"):
+        assert (f"granudep da {case} --ab-source computed --coefficients results/regression/coefficients.csv"
+                in out)
+        assert f"granudep da {case} --ab-source paper --coefficient-units normalised" in out
+        assert f"granudep da {case} --ab-source paper --coefficient-units dimensional" in out
+    assert jobs["da_reading"] == 8 and jobs["reference_converged"] == 1 and jobs["regress_diagnose"] == 1
     # every numba rule sets its own thread count
     assert re.search(r"NUMBA_NUM_THREADS=1 granudep isph T22-A70 ", out)
 

@@ -26,7 +26,9 @@ FIGURE_INPUTS = {
     "fig15": (
         "Depth-averaged model",
         [f"{RESULTS}/da/{c}_{v}.nc" for c in DA_CASES for v in DA_VARIANTS]
-        + _isph([REFERENCE_2D[c] for c in DA_CASES]),
+        + _isph([REFERENCE_2D[c] for c in DA_CASES])
+        # the converged / finest 2D runs of compare.reference (labelled with their dx in the figure)
+        + REFERENCE_EXTRA,
     ),
     "fig16": ("Depth-averaged model", [f"{RESULTS}/compare/comparison.csv"]),
     "fig17": (
@@ -61,3 +63,45 @@ for _name in ACTIVE_FIGURES:
             mem_mb=2000,
         shell:
             "MPLBACKEND=Agg granudep figure {params.name} -o {output} {input} > {log} 2>&1"
+
+
+# Figures beyond the paper's numbering (issue 13): the reading matrix and the eq-36 residuals.
+EXTRA_FIGURES = {
+    "reading-matrix": f"{RESULTS}/figures/reading_matrix.png",
+    "fig12r": f"{RESULTS}/figures/fig12_residuals.png",
+}
+
+
+rule figure_reading_matrix:
+    input:
+        f"{RESULTS}/compare/reading_matrix.csv",
+    output:
+        report(EXTRA_FIGURES["reading-matrix"], caption="../report/reading-matrix.rst", category="Depth-averaged model"),
+    log:
+        f"{LOGS}/figures/reading_matrix.log",
+    benchmark:
+        f"{BENCH}/figures/reading_matrix.tsv"
+    threads: 1
+    resources:
+        runtime=10,
+        mem_mb=2000,
+    shell:
+        "MPLBACKEND=Agg granudep figure reading-matrix -o {output} {input} > {log} 2>&1"
+
+
+rule figure_fig12_residuals:
+    input:
+        diagnosis=f"{RESULTS}/regression/diagnosis.csv",
+        residuals=f"{RESULTS}/regression/residuals.csv",
+    output:
+        report(EXTRA_FIGURES["fig12r"], caption="../report/fig12r.rst", category="Deposition law"),
+    log:
+        f"{LOGS}/figures/fig12_residuals.log",
+    benchmark:
+        f"{BENCH}/figures/fig12_residuals.tsv"
+    threads: 1
+    resources:
+        runtime=10,
+        mem_mb=2000,
+    shell:
+        "MPLBACKEND=Agg granudep figure fig12r -o {output} {input.diagnosis} {input.residuals} > {log} 2>&1"

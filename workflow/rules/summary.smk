@@ -6,6 +6,12 @@ rule summary:
     input:
         regression=REGRESSION_OUTPUTS,
         compare=f"{RESULTS}/compare/comparison.csv",
+        matrix=COMPARE_OUTPUTS["matrix"],
+        maxima=COMPARE_OUTPUTS["maxima"],
+        converged=f"{RESULTS}/compare/reference_converged.csv",
+        diagnosis=DIAGNOSIS_OUTPUTS["table"],
+        extra_figures=list(EXTRA_FIGURES.values()),
+        converged_regression=[f"{CONVERGED_REGRESSION}/table3_comparison.csv"] if CONVERGED_RUNS else [],
         verification=[f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"],
         figures=[figure_path(n) for n in ACTIVE_FIGURES],
         # the studies beyond the paper are separate targets: their sections are filled when their
@@ -17,6 +23,8 @@ rule summary:
         md=report(f"{RESULTS}/summary.md", category="Summary"),
         # our numbers quoted by the report captions (read back in common.smk)
         captions=f"{RESULTS}/caption_numbers.json",
+        # the claims scorecard (granudep.claims): every quantitative claim of the paper vs ours
+        claims=f"{RESULTS}/claims.csv",
     params:
         regression=f"{RESULTS}/regression",
         benchmarks=BENCH,
@@ -26,6 +34,7 @@ rule summary:
         convergence_n=" ".join(str(n) for n in config["convergence"]["da_n_particles"]),
         sensitivity=f"{RESULTS}/sensitivity/sensitivity.csv",
         results=RESULTS,
+        converged=f"--converged-regression {CONVERGED_REGRESSION}" if CONVERGED_RUNS else "",
     log:
         f"{LOGS}/summary.log",
     benchmark:
@@ -39,7 +48,10 @@ rule summary:
         " --verification {input.verification} --benchmarks {params.benchmarks}"
         " --convergence {params.convergence} --convergence-dx {params.convergence_dx}"
         " --convergence-n {params.convergence_n} --sensitivity {params.sensitivity}"
-        " --caption-numbers {output.captions} --results {params.results} > {log} 2>&1"
+        " --caption-numbers {output.captions} --results {params.results}"
+        " --matrix {input.matrix} --maxima {input.maxima} --diagnosis {input.diagnosis} --claims {output.claims}"
+        " {params.converged}"
+        " > {log} 2>&1"
 
 
 rule benchmarks_summary:

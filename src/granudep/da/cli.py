@@ -39,7 +39,8 @@ def _run(args) -> int:
     if args.x_inf is not None and x_inf_mode is None:
         x_inf_mode = "user"  # --x-inf alone means: use this x_inf
     overrides = {"n_particles": args.n_particles, "ab_source": args.ab_source, "coefficients": args.coefficients,
-                 "x_inf_mode": x_inf_mode, "x_inf": args.x_inf, **parse_sets(args.set)}
+                 "x_inf_mode": x_inf_mode, "x_inf": args.x_inf, "coefficient_units": args.coefficient_units,
+                 **parse_sets(args.set)}
     deposition = not args.no_deposition
     cfg = resolve(args.case, deposition=deposition, **overrides)  # ConfigError before any work
     apply_threads(args.threads)
@@ -76,6 +77,9 @@ def _run(args) -> int:
         print(f"x_inf = {ds.attrs['x_inf']:.4f} m ({ds.attrs['x_inf_mode']}, {ds.attrs['x_inf_iterations']} runs, "
               f"residual {ds.attrs['x_inf_residual']:.2e}); A = {ds.attrs['A']:.5g}, B = {ds.attrs['B']:.5g} "
               f"({ds.attrs['ab_source']}, {ds.attrs['coefficient_units']})")
+        if ds.attrs.get("x_inf_warning"):
+            LOG.warning("%s", ds.attrs["x_inf_warning"])
+            print(f"WARNING: {ds.attrs['x_inf_warning']}")
     print(summary_line(ds))
     if "travel_angle" in ds:  # a path run (geometry.path)
         from .path_run import path_summary_line
@@ -109,6 +113,8 @@ def register(subparsers) -> None:
     p.add_argument("--n-particles", type=int, metavar="N", help="particles in the initial column")
     p.add_argument("--ab-source", choices=["paper", "computed", "user"], help="where A and B of eq 36 come from")
     p.add_argument("--coefficients", metavar="COEFFS.csv", help="coefficients.csv of `granudep regress` (computed)")
+    p.add_argument("--coefficient-units", choices=["normalised", "dimensional"],
+                   help="read A, B as normalised ((hu)_C = p0 (A[x] + B), eq 36) or dimensional (m2/s)")
     p.add_argument("--x-inf-mode", choices=["self-consistent", "no-deposition", "user"], help="how x_inf in [x] is set")
     p.add_argument("--x-inf", type=float, metavar="X",
                    help="x_inf in m from the back wall (implies --x-inf-mode user)")

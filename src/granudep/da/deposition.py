@@ -9,7 +9,8 @@ resolves what the kernel needs before a run:
 * x∞ — ``user``: ``deposition.x_inf``; ``no-deposition``: the final front of the run without
   deposition; ``self-consistent`` (default): x∞ = x_front,final(x∞), solved by bracketing
   (Brent's method on g(x) = x_front,final(x) − x, bracket [x_front(x_nd), x_nd]), reporting the
-  iterations and the final residual and failing loudly if no fixed point is found.
+  iterations and the final residual; where F jumps across the diagonal or no bracket exists, a
+  documented fall-back gives x∞ and the warning is stored in the output (``x_inf_warning``).
 """
 from __future__ import annotations
 
@@ -52,6 +53,9 @@ class XInfResult:
     residual: float = 0.0  # |x_front,final(x∞) − x∞| / (x∞ − L0)
     history_x: list = field(default_factory=list)
     history_front: list = field(default_factory=list)
+    #: non-empty when the fixed point was not reached within x_inf_residual_tol and a documented
+    #: fall-back rule gave x∞ (docs/paper-notes.md, "x∞ fall-back"); the run still completes
+    warning: str = ""
 
 
 def self_consistent(run, x_nodep: float, L0: float, tol: float, residual_tol: float, max_iter: int,
@@ -62,7 +66,9 @@ def self_consistent(run, x_nodep: float, L0: float, tol: float, residual_tol: fl
     g(x) = F(x) − x changes sign once. Bracket: g(x_nd) ≤ 0 at the no-deposition runout; its image
     F(x_nd) gives g ≥ 0 (else the bracket is widened towards L0). Brent's method then stops when the
     bracket is narrower than ``tol``. A plain fixed-point iteration x ← F(x) can lock into a 2-cycle
-    here because F is decreasing: it is not used. Raises RuntimeError if no fixed point is found.
+    here because F is decreasing: it is not used. Never raises for a missing fixed point: the fall-back
+    rules (no bracket → x∞ = no-deposition runout; F jumps across the diagonal → the evaluated run
+    closest to the sign change of F(x) − x) set ``XInfResult.warning``.
     """
     from scipy.optimize import brentq
 
@@ -91,20 +97,36 @@ def self_consistent(run, x_nodep: float, L0: float, tol: float, residual_tol: fl
         tries += 1
         lo = L0 + 0.5 * (lo - L0)
         if tries > 6 or lo - L0 < tol:
-            raise RuntimeError(f"x_inf self-consistent iteration: no bracket found (g < 0 down to x = {lo:.4f} m); "
-                               f"use deposition.x_inf_mode 'no-deposition' or 'user'")
+            # fall-back 1: no sign change of g between L0 and x_nd -> x∞ = the no-deposition runout
+            warning = (f"x_inf: no bracket of the fixed point found (F(x) < x down to x = {lo:.4f} m); fall-back: "
+                       f"x_inf = the no-deposition final front {hi:.5f} m")
+            LOG.warning("%s", warning)
+            return XInfResult(hi, cache[hi], "self-consistent", len(hx), abs(g(hi)) / max(hi - L0, 1e-12), hx, hf,
+                              warning)
+    warning = ""
     try:
         root = brentq(g, lo, hi, xtol=tol, maxiter=max_iter)
     except (RuntimeError, ValueError) as exc:
-        raise RuntimeError(f"x_inf self-consistent iteration did not converge in {max_iter} iterations "
-                           f"(deposition.x_inf_max_iter): {exc}") from None
+        root = None
+        warning = f"x_inf: Brent's method stopped ({exc}); "
     # accept the evaluated point closest to a fixed point (the root itself is evaluated)
-    F(root)
+    if root is not None:
+        F(root)
     best = min(cache, key=lambda x: abs(cache[x].final_front - x))
     residual = abs(cache[best].final_front - best) / (best - L0)
     if not math.isfinite(residual) or residual > residual_tol:
-        raise RuntimeError(
-            f"x_inf self-consistent iteration: best residual |x_front - x_inf|/(x_inf - L0) = {residual:.3g} "
-            f"> deposition.x_inf_residual_tol = {residual_tol} after {len(hx)} runs (x_inf = {best:.5f} m); "
-            f"the final front jumps across the fixed point: refine output.dx_grid or numerics.n_particles")
-    return XInfResult(best, cache[best], "self-consistent", len(hx), residual, hx, hf)
+        # fall-back 2: F jumps across the diagonal (the final front is discontinuous in x∞). The sign
+        # change of g = F(x) − x is then the generalised fixed point: below it F(x) > x, above it F(x) < x.
+        # We keep the evaluated run closest to it and say so (docs/paper-notes.md, "x∞ fall-back").
+        below = [x for x in cache if cache[x].final_front > x]
+        above = [x for x in cache if cache[x].final_front <= x]
+        jump = ""
+        if below and above:
+            xl, xh = max(below), min(above)
+            jump = (f"F jumps from {cache[xl].final_front:.5f} m at x = {xl:.5f} m to {cache[xh].final_front:.5f} m at "
+                    f"x = {xh:.5f} m ({1e3 * (xh - xl):.2f} mm apart); ")
+        warning += (f"x_inf: no fixed point within x_inf_residual_tol = {residual_tol}: {jump}the final front is "
+                    f"discontinuous in x_inf; fall-back: x_inf = {best:.5f} m, the evaluated run closest to the sign "
+                    f"change of F(x) - x (residual {residual:.3g}, {len(hx)} runs)")
+        LOG.warning("%s", warning)
+    return XInfResult(best, cache[best], "self-consistent", len(hx), residual, hx, hf, warning)

@@ -8,7 +8,7 @@ import xarray as xr
 
 from ..cases import characteristic_time
 from ..config import to_yaml
-from ..front import flow_time
+from ..front import FRONT_MEASURE_DOC, flow_time, front_measures
 from ..io import provenance, var
 
 FRONT_DEFINITION = ("down-slope edge of the contiguous run of grid cells, from the deepest cell, whose total "
@@ -39,8 +39,18 @@ def to_dataset(cfg, rec, *, deposition: bool, physics, A=float("nan"), B=float("
     final = float(front[-1]) - g.L0 if front.size else float("nan")
     if xinf is not None:
         x_inf, mode, iters, resid = xinf.x_inf, xinf.mode, xinf.iterations, xinf.residual
+        x_warn = getattr(xinf, "warning", "")
     else:
+        x_warn = ""
         x_inf, mode, iters, resid = (float(front[-1]), "final front of this run (no deposition)", 0, 0.0)
+    # the robust front measures (granudep.front.front_measures) of the total depth h + h_D on the grid,
+    # per output time, exactly as the 2D run files carry them (so 2D and DA fronts are read alike)
+    x_edges = np.arange(ncell + 1) * dxg
+    d = float(cfg.material.d)
+    measures = {k: np.full(time.size, np.nan) for k in FRONT_MEASURE_DOC}
+    for i in range(time.size):
+        for k, v in front_measures(x_edges, flow[i] + depo[i], d).items():
+            measures[k][i] = v
     ds = xr.Dataset(
         data_vars={
             "front_position": var(front, ("time",), "m", "front position from the back wall (x = 0)",
@@ -70,7 +80,13 @@ def to_dataset(cfg, rec, *, deposition: bool, physics, A=float("nan"), B=float("
             "x_grid": var(x_grid, ("x_grid",), "m", "cell centre along the slope from the back wall"),
         },
     )
-    if mode == "self-consistent":
+    for k, doc in FRONT_MEASURE_DOC.items():
+        ds[k] = var(measures[k], ("time",), "m", f"front from the back wall, {doc} (profile h + h_D on the grid)")
+        last = float(measures[k][-1]) if time.size else float("nan")
+        ds[f"final_{k}"] = var(last, (), "m", f"final front from the back wall, {doc}")
+        ds[f"final_runout_norm_{k.removeprefix('front_')}"] = var((last - g.L0) / g.L0, (), "1",
+                                                               f"final runout / L0 with the front {k}")
+    if mode.startswith("self-consistent"):
         ds["x_inf_history"] = var(np.asarray(xinf.history_x), ("x_inf_iteration",), "m", "x_inf tried")
         ds["x_front_history"] = var(np.asarray(xinf.history_front), ("x_inf_iteration",), "m",
                                     "final front of the run with that x_inf")
@@ -82,7 +98,11 @@ def to_dataset(cfg, rec, *, deposition: bool, physics, A=float("nan"), B=float("
         "front_depth_threshold": cfg.front_threshold, "flow_time_tolerance": tol,
         "front_definition": FRONT_DEFINITION, "x_inf": float(x_inf), "x_inf_mode": mode,
         "x_inf_iterations": int(iters), "x_inf_residual": float(resid),
+        "x_inf_warning": x_warn,
         "A": float(A), "B": float(B), "ab_source": ab_source,
+        # where A[x] + B = 0: beyond it (hu)_C <= 0 and eq 34 deposits nothing (alpha = 0); a front that
+        # escapes past it runs out freely, which makes F(x_inf) jump (docs/paper-notes.md, "x_inf fall-back")
+        "x_norm_zero_critical": float(-B / A) if deposition and A != 0 and math.isfinite(A) else float("nan"),
         "coefficient_units": cfg.deposition.coefficient_units, "p0": cfg.p0, "t_c": t_c,
         "k_active": physics.k_active, "k_passive": physics.k_passive, "earth_pressure": num.earth_pressure,
         "phi_internal_deg": cfg.material.phi_internal_deg, "phi_basal_deg": cfg.material.phi_basal_deg,

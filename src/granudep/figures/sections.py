@@ -80,8 +80,11 @@ def fig9(sections, critical, x_norms=(0.2, 0.4, 0.6, 0.8)):
                 ax.plot([t_on], [0.0], "o", ms=7, mfc="none", mec=c, mew=1.5, zorder=5)
                 if "deposition_rate" in row and "t_s_critical_fit" in row and np.isfinite(row["deposition_rate"]):
                     t_fit, rate = float(row["t_s_critical_fit"]), float(row["deposition_rate"])
-                    ok = np.isfinite(hd)
-                    t_end = float(ts[ok][np.nanargmax(hd[ok])]) if ok.any() else ts[-1]
+                    # the line over the fitted growth phase only: from its t_s intercept (the Fig 9
+                    # reading) to the first sample after the onset with h_D >= 95 % of the final h_D
+                    hz = np.nan_to_num(hd, nan=0.0)
+                    after = np.flatnonzero((ts >= t_on) & (hz >= 0.95 * hz[-1]))
+                    t_end = float(ts[after[0]]) if after.size else float(ts[-1])
                     tt = np.array([t_fit, max(t_end, t_fit)])
                     ax.plot(tt, rate * (tt - t_fit), "-", color=c, lw=1.3)
                     r2 = f", R² = {float(row['r2']):.2f}" if "r2" in row else ""
@@ -97,7 +100,8 @@ def fig9(sections, critical, x_norms=(0.2, 0.4, 0.6, 0.8)):
         ax.legend(fontsize=7, loc="upper left")
     hide_unused(axes, len(secs))
     note(fig, "Dots: deposit depth at the sections; lines: linear fits of granudep regress (slope = normalised "
-              "deposition rate (S_D)_s); open circles: onset of deposition (t_s)_C." +
+              "deposition rate (S_D)_s), drawn from their t_s intercept over the fitted growth phase only; open circles: "
+              "onset of deposition (t_s)_C." +
               ("" if crit is not None else " No critical.csv given: fits and onsets not shown."))
     return fig
 

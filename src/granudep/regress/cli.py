@@ -37,7 +37,33 @@ def _cmd_regress(args) -> int:
     return 0
 
 
+def _cmd_diagnose(args) -> int:
+    from ..io import write_text
+    from .diagnose import diagnose, variant_summary
+    table, resid = diagnose(args.sections, args.isph or [], args.wm or [])
+    summary = variant_summary(table)
+    with pd.option_context("display.width", 220, "display.max_columns", 30, "display.max_rows", 400):
+        print(table.drop(columns=["x_norm_used"]).to_string(index=False, float_format="{:.4f}".format))
+        print("\nPer variant:")
+        print(summary.to_string(index=False, float_format="{:.4f}".format))
+    write_text(table.to_csv(index=False), args.output)
+    if args.residuals:
+        write_text(resid.to_csv(index=False), args.residuals)
+    if args.summary:
+        write_text(summary.to_csv(index=False), args.summary)
+    return 0
+
+
 def register(sub) -> None:
+    p = sub.add_parser("regress-diagnose", help="refit eq 36 with one method choice changed at a time (R², residuals)")
+    p.add_argument("sections", nargs="+", help="sections NetCDF files")
+    p.add_argument("--isph", nargs="*", help="the 2D run files (for the x_inf = 1 %% volume-front variant)")
+    p.add_argument("--wm", nargs="*", help="W_M sensitivity files (granudep monitor-wm)")
+    p.add_argument("-o", "--output", required=True, metavar="DIAGNOSIS.csv")
+    p.add_argument("--residuals", metavar="RESIDUALS.csv", help="baseline residuals per section")
+    p.add_argument("--summary", metavar="SUMMARY.csv", help="per-variant R² summary")
+    p.set_defaults(func=_cmd_diagnose)
+
     p = sub.add_parser("regress", help="critical DA momentum regression over section files (eqs 35-36, Tables 3-5)")
     p.add_argument("sections", nargs="+", help="sections NetCDF files (results/sections/{case}.nc)")
     p.add_argument("-o", "--output", required=True, metavar="DIR",
