@@ -334,6 +334,11 @@ def _study_rows_isph(folder: Path, dx=None) -> pd.DataFrame:
                 r = reference_row(ds)
                 row.update(final_runout_norm=r["final_runout_norm"], flow_time=r["flow_time"],
                            flow_time_norm=r["flow_time_norm"])
+                l0 = float(ds.attrs.get("L0", math.nan))
+                for k in ("front_5mm", "front_v99", "front_tail"):     # robust fronts (issue 11)
+                    if f"final_{k}" in ds:
+                        row[f"runout_{k}"] = (float(ds[f"final_{k}"].values) - l0) / l0
+                row["energy_max_excess"] = float(ds.attrs.get("energy_max_excess", math.nan))
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -367,13 +372,25 @@ def section_convergence(folder, dx=None, n_particles=None) -> str:
         out.append(f"2D ISPH runs in `{root / 'isph'}` (finer to the bottom). Flow time: the front moves < 1 mm "
                    "afterwards; time to rest: every particle slower than 0.1 m/s for 0.1 s; outflow: particles "
                    "that left through the downstream end of the bed.\n")
-        out.append(md_table(iso, {"run": ("run", ""), "dx_mm": ("dx (mm)", ".1f"),
-                                  "final_runout_norm": ("ΔL/L0", ".3f"), "flow_time": ("t_F (s)", ".3f"),
+        cols = {"run": ("run", ""), "dx_mm": ("dx (mm)", ".1f"), "final_runout_norm": ("ΔL/L0 (2 d front)", ".3f")}
+        for k, lab in (("runout_front_5mm", "ΔL/L0 (5 mm front)"), ("runout_front_v99", "ΔL/L0 (1 % volume)"),
+                       ("runout_front_tail", "ΔL/L0 (thin tail)")):
+            if k in iso:
+                cols[k] = (lab, ".3f")
+        out.append(md_table(iso, {**cols, "flow_time": ("t_F (s)", ".3f"),
                                   "flow_time_norm": ("t_F/t_c", ".2f"), "time_to_rest": ("time to rest (s)", ".3f"),
-                                  "n_outflow": ("outflow particles", ""), "status": ("status", "")}))
+                                  "n_outflow": ("outflow particles", ""),
+                                  "energy_max_excess": ("max energy rise / E_ref", ".4f"), "status": ("status", "")}))
         empty = pd.Series(dtype=float)
         out.append(f"\nChange between the two finest dx: runout {_drift(iso.get('final_runout_norm', empty))}, "
                    f"flow time {_drift(iso.get('flow_time', empty))}.\n")
+        from .richardson import observed_order
+        for k, lab in (("final_runout_norm", "2 d front"), ("runout_front_v99", "1 % volume front")):
+            if k in iso and iso[k].notna().sum() >= 3:
+                r = observed_order(iso["dx_mm"], iso[k])
+                txt = (f"observed order {r['order']:.2f}, Richardson estimate {r['extrapolated']:.2f}"
+                       if r["converging"] else "no observed order")
+                out.append(f"Runout ({lab}), three finest dx: {txt}{'; ' + r['reason'] if r['reason'] else ''}.\n")
     crit = []
     files = sorted((root / "regression").glob("*/critical.csv")) if (root / "regression").is_dir() else []
     for f in files:

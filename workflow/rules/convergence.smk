@@ -107,3 +107,24 @@ rule convergence:
     """Target: every convergence run and its figure."""
     input:
         f"{RESULTS}/figures/convergence.png",
+
+
+# --- Reference runs (issue 12): the four Table 5 geometries at 22° and T22-A70 at the reference dx ---
+# `snakemake -j2 reference_runs`; compare.reference.runs picks them up as the converged reference.
+REF_DX = CONV.get("reference_dx", 0.002)
+REF_CASES = CONV.get("reference_cases", ["T22-A30", "T22-A45", "T22-A70", "T22-A124"])
+
+
+use rule convergence_isph as reference_isph with:
+    output:
+        f"{RESULTS}/reference/isph/{{case}}_dx{{dx}}.nc",
+    log:
+        f"{LOGS}/reference/isph/{{case}}_dx{{dx}}.log",
+    benchmark:
+        f"{BENCH}/reference/isph/{{case}}_dx{{dx}}.tsv"
+
+
+rule reference_runs:
+    """Target: the 2D reference runs at convergence.reference_dx (not part of `all`)."""
+    input:
+        expand(f"{RESULTS}/reference/isph/{{case}}_dx{{dx}}.nc", case=REF_CASES, dx=[REF_DX]),
