@@ -118,7 +118,7 @@ def test_slurm_profile_dry_runs(workdir):
 
 
 @pytest.mark.parametrize("target, rule, count", [
-    ("convergence", "convergence_isph", 3),
+    ("convergence", "convergence_isph", 4),  # T22-A70 at 4, 3, 2, 1.4 mm (issue 11)
     ("sensitivity", "sensitivity_da", 11),  # baseline + 2 values x 5 parameters
 ])
 def test_extra_study_targets_dry_run(workdir, target, rule, count):

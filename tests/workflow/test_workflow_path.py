@@ -26,8 +26,8 @@ def test_ci_profile_runs_a_small_example_path(workdir):  # noqa: F811
 
 
 @pytest.mark.parametrize("entry, key", [
-    ({"name": "bad name", "config": "config/da/example_path.yaml"}, "['path_cases'][0]['name']"),
-    ({"name": "p", "config": "config/da/example_path.csv"}, "['path_cases'][0]['config']"),
+    ({"name": "bad name", "config": "config/da/example_path.yaml"}, "path_cases[0].name:"),
+    ({"name": "p", "config": "config/da/example_path.csv"}, "path_cases[0].config:"),
     ({"name": "p", "config": "config/da/missing.yaml"}, "config path_cases: p: config file"),
     ({"name": "p", "config": "config/da/example_user_column.yaml"}, "has no geometry.path.file"),
 ])
