@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .io import open_dataset
 from .progress import LOG
 
 CLAIM_COLUMNS = ["claim_id", "claim", "case", "paper_value", "unit", "ours_paper_res", "ours_converged",
@@ -84,7 +85,7 @@ def _isph_file(results: Path, case: str) -> Path:
 
 def _rest_ts(path) -> tuple[float, float]:
     import xarray as xr
-    with xr.open_dataset(path) as ds:
+    with open_dataset(path, load=False) as ds:
         t = float(ds["time_to_rest"].values) if "time_to_rest" in ds else float("nan")
         return t / float(ds.attrs["t_c"]), float(ds.attrs.get("dx", math.nan))
 
@@ -95,7 +96,7 @@ def _failure_angle(path) -> tuple[float, float]:
     angle from the bed plus the slope angle θ (the boundary rises towards the back wall)."""
     import xarray as xr
     from .figures.isph2d import failure_plane_angle
-    with xr.open_dataset(path) as ds:
+    with open_dataset(path) as ds:
         angle, _ = failure_plane_angle(ds, 1.0)
         return angle + float(ds.attrs["theta_deg"]), float(ds.attrs.get("dx", math.nan))
 
@@ -124,7 +125,7 @@ def acceleration_change(dep_path, nodep_path) -> float:
     """Largest |runout(dep) − runout(no dep)| up to the time the no-deposition front speed peaks,
     over the final no-deposition runout (the claim "runout does not change in the acceleration phase")."""
     import xarray as xr
-    with xr.open_dataset(dep_path) as d, xr.open_dataset(nodep_path) as n:
+    with open_dataset(dep_path) as d, open_dataset(nodep_path) as n:
         tn, rn = n["time"].values, n["runout"].values
         td, rd = d["time"].values, d["runout"].values
     speed = np.gradient(rn, tn)
@@ -250,7 +251,7 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
         import xarray as xr
         vals = []
         for fw in wm:
-            with xr.open_dataset(fw) as ds:
+            with open_dataset(fw) as ds:
                 if "rms_deviation" in ds:
                     ref = float(ds.attrs.get("wm_reference", 2.0))
                     r = ds["rms_deviation"]
