@@ -64,6 +64,6 @@ class EnergyBudget:
     max_excess: float = 0.0     # max over steps of (E_kin + E_pot + D + outflow − E_0) / E_ref
     max_excess_time: float = 0.0
 
-    def residual(self, e_kin: float, e_pot: float) -> float:
-        """(E_kin + E_pot + D + outflow − E_0): > 0 is energy the scheme created."""
-        return e_kin + e_pot + self.dissipated + self.outflow - self.e0
+    def residual(self, e_mech: float) -> float:
+        """E_mech + D + outflow − E_0 for E_mech = E_kin + E_pot: > 0 is energy the scheme created."""
+        return e_mech + self.dissipated + self.outflow - self.e0

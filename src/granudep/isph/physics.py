@@ -203,6 +203,16 @@ def velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, lmat, 
     return grad
 
 
+@njit(cache=True, inline="always")
+def shear_rate(grad, i):
+    """|γ̇| = sqrt(2 D:D), D = (∇u + ∇uᵀ)/2, from row i of the velocity gradient (du/dx, du/dy,
+    dv/dx, dv/dy): |du/dy| in simple shear (Jop et al. 2006)."""
+    dxx = grad[i, 0]
+    dyy = grad[i, 3]
+    dxy = 0.5 * (grad[i, 1] + grad[i, 2])
+    return math.sqrt(2.0 * (dxx * dxx + dyy * dyy + 2.0 * dxy * dxy))
+
+
 @njit(cache=True, parallel=PARALLEL)
 def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
     """η = μ(I) p / |γ̇| capped to [eta_min, eta_max] (eqs 4–5); returns η and |γ̇|.
@@ -214,10 +224,7 @@ def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
     eta = np.empty(n)
     gdot = np.empty(n)
     for i in prange(n):
-        dxx = grad[i, 0]
-        dyy = grad[i, 3]
-        dxy = 0.5 * (grad[i, 1] + grad[i, 2])
-        gd = math.sqrt(2.0 * (dxx * dxx + dyy * dyy + 2.0 * dxy * dxy))
+        gd = shear_rate(grad, i)
         gdot[i] = gd
         pi = max(p[i], 0.0)
         if pi <= 0.0:

@@ -17,6 +17,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .physics import shear_rate
+
 
 def mu_extended(i: np.ndarray | float, mu_s: float, mu_2: float, mu_inf: float, i0: float):
     """μ(I) = (μ_s I_0 + μ_2 I + μ_∞ I²)/(I_0 + I) (Barker & Gray 2017 eq 2.21; eq 5 for μ_∞ = 0)."""
@@ -79,15 +81,12 @@ def friction(inertial, mu_s, mu_2, mu_inf, i0, i_n1, alpha, a_minus):
 @njit(cache=True)
 def regularised_viscosity(grad, p, d, rho_s, mu_s, mu_2, mu_inf, i0, i_n1, alpha, a_minus, eta_min, eta_max):
     """η = μ(I) p/|γ̇| with μ(I) from :func:`friction`, capped to [eta_min, eta_max]; returns η, |γ̇|
-    (|γ̇| = sqrt(2 D:D), as :func:`granudep.isph.physics.mu_i_viscosity`)."""
+    (|γ̇| from :func:`granudep.isph.physics.shear_rate`, as in ``mu_i_viscosity``)."""
     n = p.size
     eta = np.empty(n)
     gdot = np.empty(n)
     for i in range(n):
-        dxx = grad[i, 0]
-        dyy = grad[i, 3]
-        dxy = 0.5 * (grad[i, 1] + grad[i, 2])
-        gd = math.sqrt(2.0 * (dxx * dxx + dyy * dyy + 2.0 * dxy * dxy))
+        gd = shear_rate(grad, i)
         gdot[i] = gd
         pi = max(p[i], 0.0)
         if pi <= 0.0:

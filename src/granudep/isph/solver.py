@@ -334,7 +334,7 @@ class IsphSolver:
         if self.period > 0:          # periodic layers: x wraps, E_pot is not defined
             return
         e_mech = self.e_mech if self.nf == self.nf_at_energy else self.mechanical_energy()
-        excess = eb.residual(e_mech, 0.0) / eb.e_ref
+        excess = eb.residual(e_mech) / eb.e_ref
         if excess > eb.max_excess:
             eb.max_excess, eb.max_excess_time = excess, self.t
         if excess > self.cfg.numerics.energy_limit:
@@ -649,8 +649,8 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
         f["pressure"].append(s.full(s.p).astype(np.float32))
         f["viscosity"].append(s.full(s.eta).astype(np.float32))
         f["free_surface"].append(s.full(s.fs, True).astype(np.int8))
-        snaps.front.append(s.front())
         edges, depth = surface_profile(s.x[:nf], s.y[:nf], s.dx, cfg.domain_length)
+        snaps.front.append(front_from_profile(edges, depth, cfg.front_depth_threshold))
         for k, val in front_measures(edges, depth, cfg.material.d).items():
             snaps.fronts[k].append(val)
         snaps.kinetic.append(s.kinetic_energy())
