@@ -133,6 +133,15 @@ class Numerics:
                                 doc="divergence of the PPE source: the renormalised divergence (exact for linear "
                                     "fields), or the negative adjoint of the corrector's pressure gradient "
                                     "(energy-consistent projection, isph/projection.py)")
+    projection: str = param("approximate", choices=("approximate", "adjoint_pair"),
+                            doc="pressure projection: the approximate projection (compact-Laplacian PPE, "
+                                "renormalised difference gradient, mirror-pressure walls), or the adjoint pair "
+                                "(corrector gradient G = -D^T of the renormalised divergence D, PPE "
+                                "(D D^T + eps L_c) p, wall particles carrying pressure: energy-stable, "
+                                "isph/projection.py)")
+    projection_stabilisation: float = param(0.1, ge=0.0, le=10.0, unit="1",
+                                            doc="adjoint_pair: weight eps of the compact Laplacian that removes "
+                                                "the checkerboard null space of D D^T")
     kernel_completion: bool = param(True, doc="PPE: missing neighbours next to the free surface count as p = 0")
     pressure_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic", "amg_sa", "amg_rs"),
                                  doc="PPE: SuperLU factorisation, Jacobi-preconditioned CG (warm start; scipy's "

@@ -29,7 +29,7 @@ from . import physics as ph
 from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_work, viscous_dissipation
 from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
-from .projection import adjoint_divergence
+from .projection import adjoint_divergence, adjoint_pair_projection
 from .linsolve import BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair
 from .neighbours import build_neighbours
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
@@ -74,6 +74,7 @@ class SolverStats:
     visc_iters: int = 0
     clamped: int = 0
     fallbacks: int = 0
+    walls_released: int = 0
 
 
 def _solve_direct(indptr, indices, data, rhss):
@@ -177,6 +178,8 @@ class IsphSolver:
             e_ref=max(self.m * G * math.cos(th) * float(np.sum(self.y[:nf])), 1e-300))
         self.e_mech = self.energy.e0
         self.nf_at_energy = nf
+        self.p_wall = None                      # adjoint_pair: wall-node pressures
+        self.wall_dry = None                    # adjoint_pair: wall nodes held at p = 0 (released)
 
     # ------------------------------------------------------------------------------------------
     def time_step(self) -> float:
@@ -269,28 +272,11 @@ class IsphSolver:
         # free-surface particles: diagonal renormalisation only (1/M_xx, 1/M_yy); with one-sided
         # support the full inverse mixes the wall-normal pressure gradient into the tangential one
         lmat_p = ph.lmat_pressure(lmat, self.fs, *mdiag)
-        if c.numerics.ppe_divergence == "adjoint":
-            div = adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, us, vs, lmat_p)
+        if c.numerics.projection == "adjoint_pair":
+            self._project_adjoint_pair(start, nbr, rx, ry, rr, gw, lmat_p, conc, us, vs, dt)
         else:
-            div = ph.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
-        unknown = np.full(nf, -1, np.int64)
-        interior = ~self.fs
-        n_unknown = int(interior.sum())
-        unknown[interior] = np.arange(n_unknown)
-        # free-surface Dirichlet value: p = 0 holds on the surface, which lies dx/2 beyond the centre
-        # of a free-surface particle: p_fs = ρ g cosθ dx/2 (bed-normal hydrostatics), or 0
-        p_new = np.where(self.fs, self.p_fs, 0.0)
-        if n_unknown:
-            pi, pj, pd, rhs = ph.assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_new, div,
-                                              us, vs, conc, self.c0, c.numerics.density_relaxation, P.wnx, P.wny,
-                                              dt, rho, self.eps2, self.a_full, self.lap_norm)
-            p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
+            self._project_approximate(start, nbr, rx, ry, rr, gw, lmat, lmat_p, conc, us, vs, dt, detached)
         t4 = _time.perf_counter()
-        self.p = p_new
-        gpx, gpy = ph.pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
-                                        dt, rho, detached)
-        self.u = us - dt / rho * gpx
-        self.v = vs - dt / rho * gpy
         ncx, ncy = ph.smoothed_gradient(start, nbr, wk, nf, h, vol, gcx, gcy)
         alpha = (ph.surface_band(start, nbr, wk, nf, self.fs, h, 2.0 * self.dx) if c.numerics.shifting_surface == "band"
                  else self.fs.astype(np.float64))
@@ -326,6 +312,54 @@ class IsphSolver:
         self.nf_at_energy = self.nf
         self._check()
         self._check_energy()
+
+    def _project_approximate(self, start, nbr, rx, ry, rr, gw, lmat, lmat_p, conc, us, vs, dt, detached):
+        """Approximate projection: compact-Laplacian PPE with mirror-pressure (Neumann) walls, the
+        renormalised difference gradient in the corrector."""
+        c = self.cfg
+        nf, h, vol, rho, P = self.nf, self.h, self.vol, self.rho, self.parts
+        if c.numerics.ppe_divergence == "adjoint":
+            div = adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, us, vs, lmat_p)
+        else:
+            div = ph.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
+        unknown = np.full(nf, -1, np.int64)
+        interior = ~self.fs
+        n_unknown = int(interior.sum())
+        unknown[interior] = np.arange(n_unknown)
+        # free-surface Dirichlet value: p = 0 holds on the surface, which lies dx/2 beyond the centre
+        # of a free-surface particle: p_fs = ρ g cosθ dx/2 (bed-normal hydrostatics), or 0
+        p_new = np.where(self.fs, self.p_fs, 0.0)
+        if n_unknown:
+            pi, pj, pd, rhs = ph.assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_new, div,
+                                              us, vs, conc, self.c0, c.numerics.density_relaxation, P.wnx, P.wny,
+                                              dt, rho, self.eps2, self.a_full, self.lap_norm)
+            p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
+        self.p = p_new
+        gpx, gpy = ph.pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
+                                        dt, rho, detached)
+        self.u = us - dt / rho * gpx
+        self.v = vs - dt / rho * gpy
+
+    def _project_adjoint_pair(self, start, nbr, rx, ry, rr, gw, lmat_p, conc, us, vs, dt):
+        """Adjoint-pair projection (:func:`projection.adjoint_pair_projection`): G = −Dᵀ, walls carry
+        pressure, kinetic energy never rises through the pressure."""
+        c = self.cfg
+        nf = self.nf
+        nw = self.parts.wnx.size
+        if self.p_wall is None or self.p_wall.size != nw:
+            self.p_wall = np.zeros(nw)
+        guess = np.concatenate((self.p, self.p_wall))
+        if self.wall_dry is None or self.wall_dry.size != nw:
+            self.wall_dry = np.zeros(nw, dtype=bool)
+        p, gpx, gpy, self.wall_dry, released = adjoint_pair_projection(
+            start, nbr, rx, ry, rr, gw, nf, nw, self.vol, lmat_p, self.parts.wnx, self.parts.wny, self.fs, self.p_fs, us, vs, conc, self.c0,
+            c.numerics.density_relaxation, dt, self.rho, self.eps2, self.lap_norm,
+            c.numerics.projection_stabilisation, guess, self._solve_ppe, self.wall_dry)
+        self.stats.walls_released += released
+        self.p = p[:nf]
+        self.p_wall = p[nf:]
+        self.u = us - dt / self.rho * gpx
+        self.v = vs - dt / self.rho * gpy
 
     def _check_energy(self) -> None:
         """Energy creation: (E_kin + E_pot + D + outflow − E_0)/E_ref above ``numerics.energy_limit``
@@ -378,8 +412,11 @@ class IsphSolver:
             return self._direct(indptr, indices, data, rhs, "ppe")
         if self.cfg.numerics.pressure_solver.startswith("amg_"):
             return self._solve_amg(indptr, indices, data, rhs, guess)
+        # the adjoint-pair operator D Dᵀ has positive off-diagonal entries (not an M-matrix): the
+        # modified incomplete Cholesky broke down on it (T22-A70, dam break), plain DIC does not
+        mic = 0.0 if self.cfg.numerics.projection == "adjoint_pair" else self.cfg.numerics.ic_modification
         return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
-                              dic=self.cfg.numerics.pressure_solver == "cg_dic")
+                              dic=self.cfg.numerics.pressure_solver == "cg_dic", mic=mic)
 
     def _direct(self, indptr, indices, data, rhs, kind):
         """SuperLU; a singular matrix stops the run as a blow-up (partial output kept)."""
@@ -427,14 +464,14 @@ class IsphSolver:
             return self._fallback(indptr, indices, data, rhs, "ppe", why)
         return sol
 
-    def _solve_cg(self, indptr, indices, data, rhs, guess, kind, dic=False):
+    def _solve_cg(self, indptr, indices, data, rhs, guess, kind, dic=False, mic=None):
         """Jacobi-preconditioned CG (numba, :mod:`.linsolve`: scipy's cg iteration bit for bit) or
         DIC-preconditioned CG (``dic``), warm-started; SuperLU if it breaks down, raises, returns a
         non-finite solution or does not converge in 1000 iterations."""
         try:
             if dic:
                 sol, it, info = pcg_dic(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0, 1000,
-                                        self.cfg.numerics.ic_modification)
+                                        self.cfg.numerics.ic_modification if mic is None else mic)
             else:
                 sol, it, info = pcg_jacobi(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0,
                                            1000)
