@@ -201,7 +201,7 @@ def test_adjoint_pair_matrix_equals_the_dense_product_plus_the_compact_laplacian
         lc[i, j] -= a
         lc[j, i] -= a
     stab = 0.3
-    full = dxm @ dxm.T + dym @ dym.T + stab * lc
+    full = (1.0 - stab) * (dxm @ dxm.T + dym @ dym.T) + stab * lc
     known = np.zeros(n, bool)
     known[:5] = True                                  # a few Dirichlet particles
     known[nf:] = ~(np.abs(dxm[nf:]).sum(1) > 0)       # dry walls
@@ -230,7 +230,7 @@ def test_adjoint_pair_projection_never_raises_the_kinetic_energy_and_removes_the
     dt, rho = 1e-3, 1000.0
     x, y = c["x"][:nf], c["y"][:nf]
     fs = y > 0.085                                    # top rows: free surface, p = 0
-    for stab, passes in ((0.0, 8), (0.0, 1), (0.1, 1), (1.0, 2)):
+    for stab, passes in ((0.0, 8), (0.0, 1), (0.1, 1), (0.5, 2)):
         us, vs = rng.normal(size=nf), rng.normal(size=nf) - 1.0   # pressed into the bed
         p, gx, gy, dry, released = _project(c, stab, us, vs, fs=fs, dt=dt, rho=rho, passes=passes)
         u, v = us - dt / rho * gx, vs - dt / rho * gy
@@ -247,8 +247,8 @@ def test_adjoint_pair_projection_never_raises_the_kinetic_energy_and_removes_the
 
 
 def test_adjoint_pair_stabilisation_leaves_a_divergence_that_vanishes_with_epsilon():
-    """D u = −(Δt/ρ) ε L_c p after the projection: the weight ε of the compact Laplacian trades
-    the checkerboard control against the divergence left for the next step."""
+    """D u = −(Δt/ρ) ε (L_c − D Dᵀ) p after the projection: the weight ε of the compact Laplacian
+    trades the checkerboard control against the divergence left for the next step."""
     c = _walled_cloud(n_side=14)
     nf, n = c["nf"], c["nf"] + c["nw"]
     rows, cols, cx, cy = _coo(c)
@@ -257,9 +257,12 @@ def test_adjoint_pair_stabilisation_leaves_a_divergence_that_vanishes_with_epsil
     us, vs = np.sin(40.0 * y) + 3.0 * x, -1.0 - 2.0 * y + np.cos(30.0 * x)
     d0 = pj.apply_divergence(n, rows, cols, cx, cy, us, vs)
     left = []
-    for stab in (0.01, 0.1, 1.0):
+    for stab in (0.01, 0.1, 0.5):
         p, gx, gy, dry, released = _project(c, stab, us, vs, fs=fs, passes=1)
         d = pj.apply_divergence(n, rows, cols, cx, cy, us - 1e-6 * gx, vs - 1e-6 * gy)
         solved = np.concatenate((~fs, p[nf:] != 0))
         left.append(np.sqrt(np.mean(d[solved] ** 2) / np.mean(d0[solved] ** 2)))
-    assert left[0] < left[1] < left[2] < 1.0
+    # the default ε = 0.01 removes ~90 % of a smooth field's divergence in one projection; at
+    # ε = 1/2 (the energy-stability limit) the compact half leaves about as much as there was
+    assert left[0] < 0.15
+    assert left[0] < left[1] < left[2]

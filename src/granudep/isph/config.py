@@ -107,6 +107,12 @@ class Wall:
     cover_offset: float = param(0.5, gt=0.0, le=2.0, unit="dx",
                                 doc="a particle is not in wall contact when another lies below it within "
                                     "this tangential offset (in dx)")
+    coulomb_normal: str = param("contact", choices=("contact", "projection"),
+                                doc="normal stress of the Coulomb friction (slip = coulomb): the contact "
+                                    "pressure of the first particle layer (PPE pressure or column weight, "
+                                    "on the bed length each contact particle carries), or the walls' normal "
+                                    "reaction on each particle from the previous projection (needs "
+                                    "numerics.projection: adjoint_pair, whose walls carry pressure)")
     layers: int = param(0, ge=0, le=8, doc="wall particle layers; 0 = enough to cover the kernel support 2h")
 
 
@@ -129,7 +135,7 @@ class Numerics:
                                       doc="weight of the density-invariant source (1 - C_i/C0)/dt^2 in the PPE")
     free_surface_pressure: str = param("half_layer", choices=("half_layer", "zero"),
                                        doc="Dirichlet value on free-surface particles: rho g cos(theta) dx/2 or 0")
-    ppe_divergence: str = param("renormalised", choices=("renormalised", "adjoint"),
+    ppe_divergence: str = param("renormalised", choices=("renormalised", "adjoint", "with_walls"),
                                 doc="divergence of the PPE source: the renormalised divergence (exact for linear "
                                     "fields), or the negative adjoint of the corrector's pressure gradient "
                                     "(energy-consistent projection, isph/projection.py)")
@@ -139,9 +145,13 @@ class Numerics:
                                 "(corrector gradient G = -D^T of the renormalised divergence D, PPE "
                                 "(D D^T + eps L_c) p, wall particles carrying pressure: energy-stable, "
                                 "isph/projection.py)")
-    projection_stabilisation: float = param(0.1, ge=0.0, le=10.0, unit="1",
-                                            doc="adjoint_pair: weight eps of the compact Laplacian that removes "
-                                                "the checkerboard null space of D D^T")
+    projection_stabilisation: float = param(0.01, ge=0.0, le=0.5, unit="1",
+                                            doc="adjoint_pair: PPE operator (1 - eps) D D^T + eps L_c; the compact "
+                                                "Laplacian L_c removes the checkerboard null space of D D^T; "
+                                                "energy-stable for eps <= 1/2")
+    wall_release: bool = param(True, doc="adjoint_pair: a wall node whose pressure comes out negative (it would "
+                                         "pull the flow) is held at p = 0 from the next step until the flow "
+                                         "presses into it again")
     kernel_completion: bool = param(True, doc="PPE: missing neighbours next to the free surface count as p = 0")
     pressure_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic", "amg_sa", "amg_rs"),
                                  doc="PPE: SuperLU factorisation, Jacobi-preconditioned CG (warm start; scipy's "
@@ -209,6 +219,9 @@ class IsphConfig:
                 raise ConfigError(f"geometry.theta_deg: must be < {key} = {phi} for a column on a bed "
                                   f"(no rest is possible on a slope steeper than the friction angle; "
                                   f"got {g.theta_deg})")
+        if self.wall.coulomb_normal == "projection" and n.projection != "adjoint_pair":
+            raise ConfigError("wall.coulomb_normal: projection needs numerics.projection: adjoint_pair (walls "
+                              f"carrying pressure; got numerics.projection: {n.projection})")
         if g.L0 < 2 * n.dx or g.H0 < 2 * n.dx:
             raise ConfigError(f"numerics.dx: must be <= min(L0, H0)/2 = {min(g.L0, g.H0) / 2} (got {n.dx})")
         npart = (g.L0 / n.dx) * (g.H0 / n.dx)

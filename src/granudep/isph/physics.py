@@ -453,6 +453,29 @@ def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, d
 
 
 @njit(cache=True, parallel=PARALLEL)
+def coulomb_drag_from_reaction(nf, u, v, a_n, planes, mu_wall, dt, u_eps, diag_u, diag_v):
+    """Coulomb wall friction from the walls' normal reaction (``wall.coulomb_normal: projection``):
+    the tangential deceleration μ_B max(a_n, 0) u_t/|u_t| of each particle, a_n its acceleration
+    along the wall normal from the wall terms of the previous projection
+    (:func:`projection.wall_normal_acceleration`), regularised below ``u_eps`` as in
+    :func:`coulomb_wall_drag` and added implicitly to the diagonal of the tangential component."""
+    for i in prange(nf):
+        for q in range(planes.shape[0]):
+            an = a_n[i, q]
+            if not an > 0.0:
+                continue
+            nx = planes[q, 0]
+            ny = planes[q, 1]
+            un = u[i] * nx + v[i] * ny
+            utx = u[i] - un * nx
+            uty = v[i] - un * ny
+            ut = math.sqrt(utx * utx + uty * uty)
+            kd = mu_wall * an / max(ut, u_eps)
+            diag_u[i] += dt * kd * ny * ny
+            diag_v[i] += dt * kd * nx * nx
+
+
+@njit(cache=True, parallel=PARALLEL)
 def divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, u, v, lmat):
     """∇·u_i = tr(L_i Σ_j V (u_j − u_i) ⊗ ∇_i W_ij) over granular neighbours (walls enter through
     the pressure Neumann condition, not here). With the renormalisation L (identity where the

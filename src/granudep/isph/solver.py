@@ -29,7 +29,8 @@ from . import physics as ph
 from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_work, viscous_dissipation
 from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
-from .projection import adjoint_divergence, adjoint_pair_projection
+from .projection import (adjoint_divergence, adjoint_pair_projection, apply_divergence, divergence_entries,
+                         wall_normal_acceleration)
 from .linsolve import BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair
 from .neighbours import build_neighbours
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
@@ -180,12 +181,17 @@ class IsphSolver:
         self.nf_at_energy = nf
         self.p_wall = None                      # adjoint_pair: wall-node pressures
         self.wall_dry = None                    # adjoint_pair: wall nodes held at p = 0 (released)
+        self.wall_an = None                     # adjoint_pair: wall-normal reaction per particle and plane
 
     # ------------------------------------------------------------------------------------------
     def time_step(self) -> float:
         n = self.cfg.numerics
         umax = float(np.sqrt(np.max(self.u ** 2 + self.v ** 2))) if self.nf else 0.0
-        dt = min(n.dt_max, 0.25 * math.sqrt(self.h / G))
+        # gravity-wave bound dt <= c sqrt(h/g): c = 0.25; the adjoint-pair projection needs
+        # c = 0.125 (a Newtonian film at dx = 0.5 mm compacted by 14 % within 0.02 s at
+        # c = 0.246 and stayed put at c = 0.12-0.18; the 1 mm film, c = 0.17, is stable)
+        c_g = 0.125 if n.projection == "adjoint_pair" else 0.25
+        dt = min(n.dt_max, c_g * math.sqrt(self.h / G))
         if umax > 0:
             dt = min(dt, n.cfl * self.h / umax)
         return dt
@@ -232,12 +238,18 @@ class IsphSolver:
         if self.slip == ph.SLIP_COULOMB:
             diag_u = data[indptr[:-1]].copy()
             wall_du, wall_dv = diag_u.copy(), diag_v.copy()
-            if c.wall.contact_length == "voronoi":
-                clen = ph.contact_length(start, nbr, nf, self.x, self.y, contact, self.planes, self.dx)
+            if c.wall.coulomb_normal == "projection":
+                if self.wall_an is None or self.wall_an.shape[0] != nf:
+                    self.wall_an = np.zeros((nf, self.planes.shape[0]))
+                ph.coulomb_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, self.mu_wall, dt,
+                                              self.u_eps, diag_u, diag_v)
             else:
-                clen = np.full(contact.shape, self.dx)
-            ph.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall, self.gx,
-                                 self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v, clen)
+                if c.wall.contact_length == "voronoi":
+                    clen = ph.contact_length(start, nbr, nf, self.x, self.y, contact, self.planes, self.dx)
+                else:
+                    clen = np.full(contact.shape, self.dx)
+                ph.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall,
+                                     self.gx, self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v, clen)
             data[indptr[:-1]] = diag_u
             wall_du = diag_u - wall_du
             wall_dv = diag_v - wall_dv
@@ -320,6 +332,9 @@ class IsphSolver:
         nf, h, vol, rho, P = self.nf, self.h, self.vol, self.rho, self.parts
         if c.numerics.ppe_divergence == "adjoint":
             div = adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, us, vs, lmat_p)
+        elif c.numerics.ppe_divergence == "with_walls":
+            rows, cols, cx, cy = divergence_entries(start, nbr, rx, ry, gw, nf, vol, lmat, P.wnx, P.wny)
+            div = apply_divergence(nf + P.wnx.size, rows, cols, cx, cy, us, vs)[:nf]
         else:
             div = ph.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
         unknown = np.full(nf, -1, np.int64)
@@ -354,10 +369,14 @@ class IsphSolver:
         p, gpx, gpy, self.wall_dry, released = adjoint_pair_projection(
             start, nbr, rx, ry, rr, gw, nf, nw, self.vol, lmat_p, self.parts.wnx, self.parts.wny, self.fs, self.p_fs, us, vs, conc, self.c0,
             c.numerics.density_relaxation, dt, self.rho, self.eps2, self.lap_norm,
-            c.numerics.projection_stabilisation, guess, self._solve_ppe, self.wall_dry)
+            c.numerics.projection_stabilisation, guess, self._solve_ppe, self.wall_dry,
+            release=c.numerics.wall_release)
         self.stats.walls_released += released
         self.p = p[:nf]
         self.p_wall = p[nf:]
+        if c.wall.coulomb_normal == "projection":
+            self.wall_an = wall_normal_acceleration(start, nbr, rx, ry, gw, nf, self.vol, lmat_p, self.parts.wnx,
+                                                    self.parts.wny, p, self.rho, self.planes)
         self.u = us - dt / self.rho * gpx
         self.v = vs - dt / self.rho * gpy
 
@@ -404,6 +423,8 @@ class IsphSolver:
             a = getattr(self, name, None)
             if a is not None and np.ndim(a) == 1 and a.size == nf:
                 setattr(self, name, a[perm])
+        if self.wall_an is not None and self.wall_an.shape[0] == nf:
+            self.wall_an = self.wall_an[perm]
         self._last_us = None
         self.permuted = True
 
@@ -412,11 +433,11 @@ class IsphSolver:
             return self._direct(indptr, indices, data, rhs, "ppe")
         if self.cfg.numerics.pressure_solver.startswith("amg_"):
             return self._solve_amg(indptr, indices, data, rhs, guess)
-        # the adjoint-pair operator D Dᵀ has positive off-diagonal entries (not an M-matrix): the
-        # modified incomplete Cholesky broke down on it (T22-A70, dam break), plain DIC does not
-        mic = 0.0 if self.cfg.numerics.projection == "adjoint_pair" else self.cfg.numerics.ic_modification
-        return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
-                              dic=self.cfg.numerics.pressure_solver == "cg_dic", mic=mic)
+        # the adjoint-pair operator (1 − ε) D Dᵀ + ε L_c is only semi-definite up to ε L_c and has
+        # positive off-diagonal entries: incomplete Cholesky (modified or not) meets non-positive
+        # pivots on it (Newtonian film, ε = 0.01: every step), so it is solved by Jacobi-CG
+        dic = self.cfg.numerics.pressure_solver == "cg_dic" and self.cfg.numerics.projection != "adjoint_pair"
+        return self._solve_cg(indptr, indices, data, rhs, guess, "ppe", dic=dic)
 
     def _direct(self, indptr, indices, data, rhs, kind):
         """SuperLU; a singular matrix stops the run as a blow-up (partial output kept)."""
@@ -464,14 +485,14 @@ class IsphSolver:
             return self._fallback(indptr, indices, data, rhs, "ppe", why)
         return sol
 
-    def _solve_cg(self, indptr, indices, data, rhs, guess, kind, dic=False, mic=None):
+    def _solve_cg(self, indptr, indices, data, rhs, guess, kind, dic=False):
         """Jacobi-preconditioned CG (numba, :mod:`.linsolve`: scipy's cg iteration bit for bit) or
         DIC-preconditioned CG (``dic``), warm-started; SuperLU if it breaks down, raises, returns a
         non-finite solution or does not converge in 1000 iterations."""
         try:
             if dic:
                 sol, it, info = pcg_dic(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0, 1000,
-                                        self.cfg.numerics.ic_modification if mic is None else mic)
+                                        self.cfg.numerics.ic_modification)
             else:
                 sol, it, info = pcg_jacobi(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0,
                                            1000)
@@ -567,6 +588,8 @@ class IsphSolver:
             a = getattr(self, name, None)
             if a is not None and np.ndim(a) == 1 and a.size == nf:
                 setattr(self, name, a[keep])
+        if self.wall_an is not None and self.wall_an.shape[0] == nf:
+            self.wall_an = self.wall_an[keep]
         self.ids = self.ids[keep]
         self.nf = int(keep.sum())
 
