@@ -32,17 +32,28 @@ SHEPARD_FLOOR = 0.5
 def depth_pass(xe, Ve, m, n, lo, hi, L, norm, qc, h, nd, E):
     """Eq 20, h_i = Σ_j V_j W_ij, and the number density Σ_j W_ij over particles with volume.
     Stores e^{−q²} of every pair in E (the windows of i = 0, 1, … one after the other) so the
-    gradient pass needs no second exponential."""
+    gradient pass needs no second exponential.
+
+    Each exponential is evaluated once per pair of real particles: for j < i the value stored in
+    j's window is reused (q² of (i, j) and (j, i) are the same floating-point number, so the
+    results are bit for bit those of one exponential per ordered pair, at half the cost)."""
     qc2 = qc * qc
     ec = math.exp(-qc2)
+    off = np.empty(n, np.int64)
     p = 0
     for i in range(n):
-        xi = xe[m + i]
+        off[i] = p
+        ki = m + i
+        xi = xe[ki]
         s = 0.0
         c = 0.0
         for j in range(lo[i], hi[i]):
             q2 = ((xi - xe[j]) / L) ** 2
-            e = math.exp(-q2) if q2 < qc2 else 0.0
+            jr = j - m
+            if jr >= 0 and jr < i and ki < hi[jr]:
+                e = E[off[jr] + ki - lo[jr]]
+            else:
+                e = math.exp(-q2) if q2 < qc2 else 0.0
             E[p] = e
             p += 1
             vj = Ve[j]

@@ -3,8 +3,7 @@ model and the path model alike (issues 15 and 16: one home for each formula).
 
 ``advance`` runs many steps inside numba; every step is
 
-1. ``sort_and_smoothing``: sort by position (insertion sort, ``neighbours``), smoothing length L_s
-   (eq 25 generalised, or fixed);
+1. ``neighbours.insertion_sort`` by position, ``smoothing_length`` L_s (eq 25 generalised, or fixed);
 2. stage 1 at (x^n, u^n): ``sph.evaluate_into`` (depth eq 20 with mirror ghosts, gradients eqs 21–22
    and 28–29, XSPH sum eq 33), the deposit gradient (deposit as bed), ``bed_terms`` (g sinθ, g cosθ,
    k of eqs 8–9, Coulomb friction tanφ_B N⁺ with N = g cosθ + κu², depth = area / width — all read
