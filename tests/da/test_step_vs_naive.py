@@ -123,3 +123,17 @@ def test_step_params_is_a_typed_record():
     assert isinstance(p.back_wall, bool) and isinstance(p.max_steps, int) and isinstance(p.eq12, bool)
     assert p.tan_phi_basal == pytest.approx(math.tan(math.radians(cfg.material.phi_basal_deg)))
     assert all(isinstance(v, (bool, int, float)) for v in p)
+
+
+@pytest.mark.slow
+def test_step_vs_naive_without_jit():
+    """The same comparisons with NUMBA_DISABLE_JIT=1: the stages also work as plain Python."""
+    import os
+    import subprocess
+    import sys
+    here = os.path.dirname(__file__)
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", "not slow",
+                          os.path.join(here, "test_step_vs_naive.py")], env=env, capture_output=True, text=True,
+                         timeout=600)
+    assert out.returncode == 0, out.stdout[-2000:] + out.stderr[-2000:]
