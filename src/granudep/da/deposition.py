@@ -1,7 +1,7 @@
 """Deposition set-up (eqs 34, 36): the A, B coefficients and the run-out x∞ in [x].
 
 The deposition *rate* and the transfer of volume to the fixed grid happen inside the step kernel
-(``solver.advance`` with ``physics.alpha_coefficient`` / ``deposition_rate``). This module
+(``step.drive_and_deposition`` with ``physics.alpha_coefficient`` / ``deposition_rate``). This module
 resolves what the kernel needs before a run:
 
 * A, B — ``paper``: Table 5 row of the case; ``user``: ``deposition.A``/``deposition.B``;

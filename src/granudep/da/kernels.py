@@ -28,13 +28,27 @@ def kernel_norm(L: float, q_c: float) -> float:
 
 
 @njit(cache=True, inline="always")
+def gauss_w_e(e: float, q2: float, norm: float, qc2: float, ec: float) -> float:
+    """Eq 23 from e = e^{−q²} (q² < q_c²; e = 0 beyond): the one home of the kernel formula.
+    ``qc2`` = q_c², ``ec`` = e^{−q_c²}; the pair passes evaluate e once per pair and reuse it."""
+    return norm * (e - ec * (1.0 + qc2 - q2))
+
+
+@njit(cache=True, inline="always")
+def gauss_gradw_e(g2: float, r: float, e: float, ec: float) -> float:
+    """Eq 24 from e = e^{−q²}: g2 r (e − e^{−q_c²}) with g2 = 2/(N L²) (= −∂W_ij/∂x_i, r = x_i − x_j).
+    ``g2`` may carry a weight (c · 2/(N L²)): the product is then formed in that order."""
+    return g2 * r * (e - ec)
+
+
+@njit(cache=True, inline="always")
 def gauss_w(r: float, L: float, norm: float, q_c: float) -> float:
     """Eq 23, truncated smoothly at |r| = q_c L; ``norm`` from :func:`kernel_norm`."""
     q2 = (r / L) ** 2
     qc2 = q_c * q_c
     if q2 >= qc2:
         return 0.0
-    return norm * (math.exp(-q2) - math.exp(-qc2) * (1.0 + qc2 - q2))
+    return gauss_w_e(math.exp(-q2), q2, norm, qc2, math.exp(-qc2))
 
 
 @njit(cache=True, inline="always")
@@ -44,4 +58,4 @@ def gauss_gradw(r: float, L: float, norm: float, q_c: float) -> float:
     qc2 = q_c * q_c
     if q2 >= qc2:
         return 0.0
-    return 2.0 * r / (L * L) * norm * (math.exp(-q2) - math.exp(-qc2))
+    return gauss_gradw_e(2.0 * norm / (L * L), r, math.exp(-q2), math.exp(-qc2))

@@ -345,7 +345,7 @@ def bed_of(path_cfg: PathGeometry) -> Bed:
 
 def straight_bed(theta: float, length: float, ds: float) -> Bed:
     """A straight bed of slope θ (rad) and length along the bed, with sin θ and cos θ exactly as
-    ``solver.parameter_vector`` computes them: the constant-θ model as a path (bit-for-bit test)."""
+    ``solver.constant_bed_table`` tabulates them: the constant-θ model as a path (bit-for-bit test)."""
     ns = int(math.ceil(length / ds)) + 1
     s = np.linspace(0.0, length, ns)
     one = np.ones(ns)

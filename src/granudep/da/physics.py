@@ -99,12 +99,54 @@ def deposition_rate(alpha: float, dhu_dt: float, u: float, u_min: float) -> floa
 
 
 @njit(cache=True, inline="always")
-def deposition_momentum_dv(removed_depth: float, h: float, g: float, tan_phi_i: float) -> float:
-    """Velocity loss this step from eq 12: u S_D = g Δh_D tan φ_I, divided by h (eq 27):
-    g tan φ_I Δh_D / h · Δt / Δt  → returned per unit time (m/s²); Δh_D = |S_D| Δt."""
-    if h <= 0.0:
-        return 0.0
-    return g * tan_phi_i * removed_depth / h
+def driving_acceleration(g_sin: float, k: float, g_cos: float, dhdx: float, dhD_dx: float) -> float:
+    """Friction-free du/dt of eqs 11/27 (with the deposit as bed): g sinθ − k g cosθ ∂h/∂x − g cosθ ∂h_D/∂x."""
+    return g_sin - k * g_cos * dhdx - g_cos * dhD_dx
+
+
+@njit(cache=True, inline="always")
+def momentum_rate(h: float, u: float, a_net: float, dudx: float) -> float:
+    """d|hu|/dt of eq 34 along the particle: sgn(u) h du/dt − |u| h ∂u/∂x (dh/dt = −h ∂u/∂x);
+    h |du/dt| for a particle at rest (it can only start to move)."""
+    if u != 0.0:
+        return math.copysign(1.0, u) * h * a_net - abs(u) * h * dudx
+    return h * abs(a_net)
+
+
+@njit(cache=True, inline="always")
+def deposited_fraction(s_d: float, dt: float, h: float) -> float:
+    """Fraction of a particle's volume deposited this step, −S_D Δt / h (S_D ≤ 0), at most 1."""
+    return min(1.0, -s_d * dt / h)
+
+
+@njit(cache=True, inline="always")
+def deposition_velocity_loss(g: float, tan_phi_i: float, fraction: float, dt: float) -> float:
+    """Velocity loss this step from eq 12, u S_D = g Δh_D tan φ_I per unit depth (eq 27):
+    g tan φ_I (Δh_D / h) Δt with Δh_D / h the deposited fraction; a Coulomb-type budget (m/s)."""
+    return g * tan_phi_i * fraction * dt
+
+
+@njit(cache=True, inline="always")
+def heun_friction_budget(dt: float, friction_1: float, friction_2: float) -> float:
+    """Coulomb budget (m/s) of the corrector: ½ Δt (F₁ + F₂) of the friction decelerations of both
+    stages (Heun); = F Δt exactly for a constant F."""
+    return 0.5 * dt * (friction_1 + friction_2)
+
+
+@njit(cache=True, inline="always")
+def wave_speed_absolute(u: float, h: float, g: float) -> float:
+    """Signal speed of eq 32: max(|u|, √(g h))."""
+    return max(abs(u), math.sqrt(g * h))
+
+
+@njit(cache=True, inline="always")
+def wave_speed_relative(h: float, g: float, L: float, dudx: float, cap: float) -> float:
+    """Lagrangian signal speed √(g h) + L |∂u/∂x|, the relative velocity across the support capped
+    at ``cap`` (2 max|u|; an isolated or nearly emptied particle can have an ill-conditioned ∂u/∂x)."""
+    r = L * abs(dudx)
+    if not r <= cap:
+        r = cap
+    return math.sqrt(g * h) + r
 
 
 # ----------------------------------------------------------------------------------------------

@@ -1,0 +1,405 @@
+"""One DA time step as a recipe of named stages (Sections 2.3–2.4, Fig 4), for the constant-θ
+model and the path model alike (issues 15 and 16: one home for each formula).
+
+``advance`` runs many steps inside numba; every step is
+
+1. ``neighbours.insertion_sort`` by position, ``smoothing_length`` L_s (eq 25 generalised, or fixed);
+2. stage 1 at (x^n, u^n): ``sph.evaluate_into`` (depth eq 20 with mirror ghosts, gradients eqs 21–22
+   and 28–29, XSPH sum eq 33), the deposit gradient (deposit as bed), ``bed_terms`` (g sinθ, g cosθ,
+   k of eqs 8–9, Coulomb friction tanφ_B N⁺ with N = g cosθ + κu², depth = area / width — all read
+   from the bed table: a path, or two equal stations for a constant θ);
+3. ``time_step``: eq 32 (``absolute``) or the Lagrangian ``relative`` rule of the path model;
+4. ``drive_and_deposition``: driving acceleration a^n, deposition fraction (eqs 14, 34, 36) and the
+   eq 12 momentum loss;
+5. ``predictor``: ũ = u^n + Δt a^n (Coulomb-limited), x̃ = x^n + Δt u^n;
+6. stage 2 at (x̃, ũ): the same operators and ``bed_terms``;
+7. ``corrector``: RK2 eqs 30–31 with the Heun friction budget, XSPH eq 33, mirror at the wall;
+8. ``mark_envelopes`` (path outputs), then ``commit``: positions, velocities, and the deposited
+   volume from the particles onto the grid (flowing + deposited volume conserved to round-off).
+
+The per-particle formulas live in ``physics.py``, the SPH sums in ``sph.py``; the run constants come
+as one typed record, :class:`StepParams` (a NamedTuple: numba types it field by field and
+``cache=True`` keeps working, unlike a structref, whose types must be registered and boxed by hand).
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from .neighbours import insertion_sort
+from .path import T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
+from .physics import (alpha_coefficient, bed_normal_acceleration, coulomb_update, critical_momentum,
+                      deposited_fraction, deposition_rate, deposition_velocity_loss, depth_from_area,
+                      depth_gradient_from_area, driving_acceleration, earth_pressure, heun_friction_budget,
+                      momentum_rate, net_acceleration, wave_speed_absolute, wave_speed_relative)
+from .sph import F_H, F_ND, F_U, F_V, F_V0, deposit_gradient, deposit_to_grid, evaluate_into
+
+# status codes returned by ``advance``
+RUNNING, AT_REST, NONFINITE, ESCAPED, MAX_STEPS = 0, 1, 2, 3, 4
+# rows of the envelope array: max depth, max speed, arrival time
+E_H, E_U, E_T = 0, 1, 2
+# diagnostics: clipped (N < 0) particle-stages, largest deficit −N/g, station of it
+D_LIFT, D_DEFICIT, D_WHERE = 0, 1, 2
+
+
+class StepParams(NamedTuple):
+    """The run constants every stage reads (SI units, radians already applied)."""
+    g: float                      # gravity (m/s²)
+    cfl: float                    # CFL number of eq 32
+    xsph_delta: float             # δ of eq 33
+    kernel_support: float         # q_c: kernel cut-off in units of L_s
+    smoothing_B: float            # B of eq 25
+    L_fixed: float                # fixed L_s (m); 0: eq 25
+    back_wall: bool               # mirror wall at x = 0
+    x_min: float                  # a particle below this has left the domain (−inf: never)
+    x_max: float                  # ... or above this (m)
+    u_rest: float                 # at rest when every |u| < u_rest (m/s)
+    max_steps: int
+    deposition: bool              # deposition source term on
+    deposit_as_bed: bool          # −g cosθ ∂h_D/∂x in the momentum balance
+    eq12: bool                    # eq 12 momentum loss of the depositing volume
+    clamp_x: bool                 # clamp [x] of eq 36 to [0, 1]
+    momentum_scale: float         # p0 (normalised A, B) or 1
+    L0: float                     # gate: [x] = (x − L0)/(x∞ − L0)
+    x_inf: float
+    u_min: float                  # regularisation of eq 14 (m/s)
+    tan_phi_internal: float       # tan φ_I (eq 12)
+    tan_phi_basal: float          # tan φ_B (0 without basal friction)
+    min_volume_fraction: float    # a particle below this fraction of its initial volume deposits all
+    dx_grid: float                # deposit / envelope grid spacing (m)
+    # bed table and path options (constant θ: origin 0, a two-station table, no curvature, width 1)
+    origin: float                 # station s of x = 0
+    ds: float                     # station spacing of the bed table
+    centripetal: bool             # κ u² in the normal stress
+    has_width: bool               # deposit also kept as volume / width (bed term, h_D)
+    dt_relative: bool             # time_step 'relative' (path) instead of eq 32
+    geometry_step: float          # |u| Δt ≤ CFL · geometry_step (m) with dt_relative
+    front_threshold: float        # arrival-time depth threshold of the envelopes (m)
+
+
+# ----------------------------------------------------------------------------------------------
+# bed table (per station s: sinθ, cosθ, κ, b, db/ds, k_a, k_p, A, B), linear in s
+# ----------------------------------------------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def locate(s, ds, ns):
+    """Table cell k and weight w of station s (clamped to the table: the ends are held)."""
+    f = s / ds
+    if f <= 0.0:
+        return 0, 0.0
+    k = int(math.floor(f))
+    if k >= ns - 1:
+        return ns - 2, 1.0
+    return k, f - k
+
+
+@njit(cache=True, inline="always")
+def table_at(tab, row, k, w):
+    """Row ``row`` of the bed table at cell k, weight w (exactly tab[row, k] where the row is constant)."""
+    a = tab[row, k]
+    return a + w * (tab[row, k + 1] - a)
+
+
+# ----------------------------------------------------------------------------------------------
+# stages
+# ----------------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def smoothing_length(F, p):
+    """Eq 25 generalised: L_s = B N / Σ_i n_i with n_i = Σ_j W_ij over particles with volume (for equal
+    volumes n_i = h_i/V_i, eq 25 exactly); or the fixed L_s."""
+    if p.L_fixed > 0.0:
+        return p.L_fixed
+    s = 0.0
+    c = 0
+    for i in range(F.shape[1]):
+        if F[F_V, i] > 0.0 and F[F_ND, i] > 0.0:
+            s += F[F_ND, i]
+            c += 1
+    return p.smoothing_B * c / s
+
+
+@njit(cache=True)
+def bed_terms(x, u, V, h, dh, du, tab, p, gs, gc, fc, k, diag):
+    """Per-particle bed quantities at stage positions x and velocities u: turns the SPH area h (in
+    place) into the depth and dh into ∂h/∂s (width), and fills g sinθ (gs), g cosθ (gc), the
+    friction deceleration tanφ_B N⁺ (fc; N < 0 is clipped and counted in ``diag``) and k (k)."""
+    ns = tab.shape[1]
+    g = p.g
+    for i in range(x.shape[0]):
+        if V[i] <= 0.0:
+            gs[i] = 0.0
+            gc[i] = 0.0
+            fc[i] = 0.0
+            k[i] = 0.0
+            continue
+        kk, w = locate(x[i] + p.origin, p.ds, ns)
+        b = table_at(tab, T_WIDTH, kk, w)
+        h[i] = depth_from_area(h[i], b)
+        dh[i] = depth_gradient_from_area(dh[i], h[i], b, table_at(tab, T_DWIDTH, kk, w))
+        cs = table_at(tab, T_COS, kk, w)
+        gs[i] = g * table_at(tab, T_SIN, kk, w)
+        gc[i] = g * cs
+        kap = table_at(tab, T_KAPPA, kk, w) if p.centripetal else 0.0
+        nrm = bed_normal_acceleration(g, cs, kap, u[i])
+        if nrm < 0.0:
+            diag[D_LIFT] += 1.0
+            if -nrm / g > diag[D_DEFICIT]:
+                diag[D_DEFICIT] = -nrm / g
+                diag[D_WHERE] = x[i] + p.origin
+            nrm = 0.0
+        fc[i] = p.tan_phi_basal * nrm
+        k[i] = earth_pressure(du[i], table_at(tab, T_KACT, kk, w), table_at(tab, T_KPASS, kk, w))
+
+
+@njit(cache=True)
+def store_depths(F, h, nd):
+    """Keep the stage-1 depth and (for particles with volume) the number density for eq 25."""
+    V = F[F_V]
+    for i in range(h.shape[0]):
+        F[F_H, i] = h[i]
+        if V[i] > 0.0:
+            F[F_ND, i] = nd[i]
+
+
+@njit(cache=True)
+def time_step(u, V, h, du, L, p):
+    """Δt = CFL L_s / max_i c_i: c = max(|u|, √(gh)) (eq 32, ``absolute``) or √(gh) + L|∂u/∂s|
+    capped at 2 max|u| (``relative``), plus |u| Δt ≤ CFL · geometry_step there."""
+    n = u.shape[0]
+    vmax = 0.0
+    wmax = 0.0
+    if p.dt_relative:
+        for i in range(n):
+            if V[i] > 0.0 and abs(u[i]) > wmax:
+                wmax = abs(u[i])
+    for i in range(n):
+        if V[i] > 0.0:
+            if p.dt_relative:
+                c = wave_speed_relative(h[i], p.g, L, du[i], 2.0 * wmax)
+            else:
+                c = wave_speed_absolute(u[i], h[i], p.g)
+            if c > vmax:
+                vmax = c
+    dt = p.cfl * L / vmax
+    if p.dt_relative and wmax * dt > p.cfl * p.geometry_step:
+        dt = p.cfl * p.geometry_step / wmax
+    return dt
+
+
+@njit(cache=True)
+def drive_and_deposition(x, u, V, h, dh, du, gb, gs, gc, fc, k, tab, p, dt, a, fr, fdv):
+    """Stage 1: driving acceleration a (eqs 11/27), the deposited fraction fr (eqs 14, 34, 36) and
+    the predictor's Coulomb budget fdv = F Δt (+ the eq 12 loss)."""
+    ns = tab.shape[1]
+    for i in range(x.shape[0]):
+        fr[i] = 0.0
+        fdv[i] = fc[i] * dt
+        if V[i] <= 0.0:
+            a[i] = 0.0
+            continue
+        a[i] = driving_acceleration(gs[i], k[i], gc[i], dh[i], gb[i])
+        if p.deposition and h[i] > 0.0:
+            dhu = momentum_rate(h[i], u[i], net_acceleration(a[i], u[i], fc[i]), du[i])
+            kk, w = locate(x[i] + p.origin, p.ds, ns)
+            huc = critical_momentum(x[i], p.L0, p.x_inf, table_at(tab, T_A, kk, w), table_at(tab, T_B, kk, w),
+                                    p.momentum_scale, p.clamp_x)
+            al = alpha_coefficient(abs(u[i]) * h[i], huc, dhu)
+            if al > 0.0:
+                f = deposited_fraction(deposition_rate(al, dhu, u[i], p.u_min), dt, h[i])
+                fr[i] = f
+                if p.eq12:
+                    fdv[i] += deposition_velocity_loss(p.g, p.tan_phi_internal, f, dt)
+
+
+@njit(cache=True)
+def predictor(x, u, V, a, fdv, dt, p, xt, ut):
+    """Stage 2 state: ũ = u + Δt a (Coulomb-limited by fdv), x̃ = x + Δt u (mirrored at the wall)."""
+    for i in range(x.shape[0]):
+        if V[i] > 0.0:
+            ut[i] = coulomb_update(u[i] + dt * a[i], fdv[i])
+            xt[i] = x[i] + dt * u[i]
+            if p.back_wall and xt[i] < 0.0:
+                xt[i] = -xt[i]
+        else:
+            ut[i] = 0.0
+            xt[i] = x[i]
+
+
+@njit(cache=True)
+def corrector(x, u, V, a1, dh2, gb2, xs2, gs2, gc2, fc1, fc2, k2, fr, dt, p, xn, un):
+    """Eqs 30, 33, 31: u^{n+1} = u + ½Δt (a₁ + a₂) under the Heun friction budget (+ eq 12),
+    x^{n+1} = x + Δt (½(u + u^{n+1}) + δ XSPH). Returns (status, sorted index of the offending
+    particle or −1): NONFINITE, or ESCAPED below x_min / above x_max."""
+    for i in range(x.shape[0]):
+        if V[i] <= 0.0:
+            un[i] = 0.0
+            xn[i] = x[i]
+            continue
+        a2 = driving_acceleration(gs2[i], k2[i], gc2[i], dh2[i], gb2[i])
+        budget = heun_friction_budget(dt, fc1[i], fc2[i])
+        if p.eq12 and fr[i] > 0.0:
+            budget += deposition_velocity_loss(p.g, p.tan_phi_internal, fr[i], dt)
+        un[i] = coulomb_update(u[i] + 0.5 * dt * (a1[i] + a2), budget)
+        xn[i] = x[i] + dt * (0.5 * (u[i] + un[i]) + p.xsph_delta * xs2[i])
+        if p.back_wall and xn[i] < 0.0:
+            xn[i] = -xn[i]
+            if un[i] < 0.0:
+                un[i] = 0.0
+        if not (math.isfinite(xn[i]) and math.isfinite(un[i])):
+            return NONFINITE, i
+        if xn[i] > p.x_max or xn[i] < p.x_min:
+            return ESCAPED, i
+    return RUNNING, -1
+
+
+@njit(cache=True)
+def mark_envelopes(env, x0, x1, h, u, V, t, dxg, thr):
+    """Along-path envelopes: every grid cell between a particle's old and new position gets
+    max depth, max |u|, and the first time a particle at least ``thr`` deep passed it
+    (a zero-width ``env``: no envelopes)."""
+    ng = env.shape[1]
+    if ng == 0:
+        return
+    for i in range(x1.shape[0]):
+        if V[i] <= 0.0:
+            continue
+        a = min(x0[i], x1[i])
+        b = max(x0[i], x1[i])
+        c0 = max(0, int(math.floor(a / dxg)))
+        c1 = min(ng - 1, int(math.floor(b / dxg)))
+        hi = h[i]
+        ui = abs(u[i])
+        for c in range(c0, c1 + 1):
+            if hi > env[E_H, c]:
+                env[E_H, c] = hi
+            if ui > env[E_U, c]:
+                env[E_U, c] = ui
+            if hi >= thr and t < env[E_T, c]:
+                env[E_T, c] = t
+
+
+@njit(cache=True, inline="always")
+def deposit_with_width(dep, depb, binv, xp, dv, dxg):
+    """``sph.deposit_to_grid`` for both the cell volumes and volume/b (same weights)."""
+    ng = dep.shape[0]
+    s = xp / dxg - 0.5
+    k = int(math.floor(s))
+    if k < 0:
+        dep[0] += dv
+        depb[0] += dv * binv[0]
+    elif k >= ng - 1:
+        dep[ng - 1] += dv
+        depb[ng - 1] += dv * binv[ng - 1]
+    else:
+        w = s - k
+        a = dv * (1.0 - w)
+        dep[k] += a
+        dep[k + 1] += dv - a
+        depb[k] += a * binv[k]
+        depb[k + 1] += (dv - a) * binv[k + 1]
+
+
+@njit(cache=True)
+def commit(x, F, xn, un, fr, dep, depb, binv, p):
+    """x, u ← x^{n+1}, u^{n+1}; the deposited fraction of each particle's volume goes onto the grid
+    (all of it below min_volume_fraction of the initial volume: the particle stops). Returns max |u|."""
+    u = F[F_U]
+    V = F[F_V]
+    umax = 0.0
+    for i in range(x.shape[0]):
+        x[i] = xn[i]
+        if V[i] <= 0.0:
+            continue
+        if fr[i] > 0.0:
+            dv = fr[i] * V[i]
+            rest = V[i] - dv
+            if rest < p.min_volume_fraction * F[F_V0, i]:
+                dv = V[i]
+                rest = 0.0
+                un[i] = 0.0
+            V[i] = rest
+            if p.has_width:
+                deposit_with_width(dep, depb, binv, xn[i], dv, p.dx_grid)
+            else:
+                deposit_to_grid(dep, xn[i], dv, p.dx_grid)
+        u[i] = un[i]
+        if V[i] > 0.0 and abs(un[i]) > umax:
+            umax = abs(un[i])
+    return umax
+
+
+# ----------------------------------------------------------------------------------------------
+# the step loop
+# ----------------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps):
+    """Step from t until t_target (exactly), rest, or a failure. Returns
+    (t, nsteps, status, id of the offending particle or −1, L_s, Δt of the last step).
+
+    x, F, order: sorted particle state (``sph.F_*`` rows); dep: deposited volume per grid cell;
+    depb, binv: deposit / width and 1/width per cell (``p.has_width``; otherwise unused);
+    env: (3, n_cells) envelopes or (3, 0); diag: lift-off diagnostics (3,); p: ``StepParams``;
+    tab: bed table (``path.N_TABLE`` rows over the stations)."""
+    n = x.shape[0]
+    qc = p.kernel_support
+    wall = p.back_wall
+    bed = p.deposition and p.deposit_as_bed
+    bed_dep = depb if p.has_width else dep
+    xe = np.empty(2 * n)
+    ue = np.empty(2 * n)
+    Ve = np.empty(2 * n)
+    he = np.empty(2 * n)
+    lo = np.empty(n, np.int64)
+    hi = np.empty(n, np.int64)
+    E = np.empty(0)
+    h1, nd1, dh1, du1, xs1 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    h2, nd2, dh2, du2, xs2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    gs1, gc1, fc1, k1 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    gs2, gc2, fc2, k2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    a1, ut, xt, un, xn = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    fr, fdv = np.zeros(n), np.zeros(n)
+    gb1, gb2 = np.zeros(n), np.zeros(n)
+    L = 0.0
+    dt = 0.0
+    while t < t_target:
+        if nsteps >= p.max_steps:
+            return t, nsteps, MAX_STEPS, -1, L, dt
+        insertion_sort(x, F, order)
+        L = smoothing_length(F, p)
+        u = F[F_U]
+        V = F[F_V]
+        # stage 1 at (x^n, u^n)
+        E = evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h1, nd1, dh1, du1, xs1, E)
+        if bed:
+            deposit_gradient(x, V, bed_dep, p.dx_grid, L, qc, wall, gb1)
+        bed_terms(x, u, V, h1, dh1, du1, tab, p, gs1, gc1, fc1, k1, diag)
+        store_depths(F, h1, nd1)
+        dt = time_step(u, V, h1, du1, L, p)
+        if not dt > 0.0:
+            return t, nsteps, NONFINITE, -1, L, dt
+        last = t + dt >= t_target
+        if last:
+            dt = t_target - t
+        drive_and_deposition(x, u, V, h1, dh1, du1, gb1, gs1, gc1, fc1, k1, tab, p, dt, a1, fr, fdv)
+        predictor(x, u, V, a1, fdv, dt, p, xt, ut)
+        # stage 2 at (x̃, ũ)
+        E = evaluate_into(xt, ut, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h2, nd2, dh2, du2, xs2, E)
+        if bed:
+            deposit_gradient(xt, V, bed_dep, p.dx_grid, L, qc, wall, gb2)
+        bed_terms(xt, ut, V, h2, dh2, du2, tab, p, gs2, gc2, fc2, k2, diag)
+        status, i = corrector(x, u, V, a1, dh2, gb2, xs2, gs2, gc2, fc1, fc2, k2, fr, dt, p, xn, un)
+        if status != RUNNING:
+            return t, nsteps, status, order[i], L, dt
+        t_new = t_target if last else t + dt
+        mark_envelopes(env, x, xn, h1, un, V, t_new, p.dx_grid, p.front_threshold)
+        umax = commit(x, F, xn, un, fr, dep, depb, binv, p)
+        t = t_new
+        nsteps += 1
+        if umax < p.u_rest:
+            return t, nsteps, AT_REST, -1, L, dt
+    return t, nsteps, RUNNING, -1, L, dt

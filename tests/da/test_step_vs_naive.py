@@ -1,0 +1,139 @@
+"""The numba step (``granudep.da.step.advance``, shared by the constant-θ and the path model) against
+its plain-NumPy twin (``tests/da/naive_da.py``): one step on small problems.
+
+Not bit for bit: the twin sums dense rows with NumPy's pairwise summation and the pair passes are
+compiled with FMA contraction, so the two differ by re-association round-off; the comparison is to
+1e-14 of each field's scale (measured: at most 5e-15, the deposit). Bit-for-bit identity of whole
+runs before/after the refactoring was checked once against the previous code (commit message)."""
+import math
+
+import numpy as np
+import pytest
+
+import naive_da as nv
+from granudep.da.config import resolve
+from granudep.da.path import N_TABLE, T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
+from granudep.da.solver import Physics, constant_bed_table, step_params
+from granudep.da.sph import F_H, F_ND, F_U, F_V, F_V0, N_FIELDS
+from granudep.da.step import MAX_STEPS, StepParams, advance
+
+N = 48
+
+
+def _state(rng, n=N, L0=0.2, dead=()):
+    """Sorted, irregular positions in [0, L0], smooth nonuniform velocities and volumes."""
+    dx = L0 / n
+    x = (np.arange(n) + 0.5) * dx + rng.uniform(-0.2, 0.2, n) * dx
+    u = 0.4 + 0.6 * np.sin(3.0 * x / L0) + rng.uniform(-0.05, 0.05, n)
+    V = 0.14 * dx * (1.0 + 0.3 * np.cos(2.0 * x / L0)) * (1.0 - x / (1.5 * L0))
+    V0 = V * 1.05
+    V[list(dead)] = 0.0
+    u[list(dead)] = 0.0                                   # as after a full deposition
+    nd = np.full(n, 1.0 / dx) * (1.0 + 0.1 * rng.uniform(-1, 1, n))
+    return x, u, V, V0, nd
+
+
+def _kernel_step(x, u, V, V0, nd, dep, depb, binv, p, tab, ng_env=0):
+    F = np.zeros((N_FIELDS, x.size))
+    F[F_U], F[F_V], F[F_V0], F[F_ND] = u, V, V0, nd
+    xk, order = x.copy(), np.arange(x.size, dtype=np.int64)
+    dep, depb = dep.copy(), depb.copy()
+    env = np.zeros((3, ng_env))
+    env[2] = np.inf
+    out = advance(xk, F, order, dep, depb if p.has_width else dep, binv, env, np.zeros(3), 0.0, 10.0,
+                  p._replace(max_steps=1), tab, 0)
+    assert out[2] == MAX_STEPS and out[1] == 1          # exactly one step taken
+    assert np.all(order == np.arange(x.size))           # the test states stay sorted
+    return xk, F, dep, depb, out[5], out[4]
+
+
+def _compare(mine, ref, what):
+    scale = max(float(np.max(np.abs(ref))), 1e-300)
+    err = float(np.max(np.abs(np.asarray(mine) - np.asarray(ref)))) / scale
+    assert err < 1e-14, f"{what}: relative difference {err:.3e}"
+    return err
+
+
+def _constant_case(deposition):
+    cfg = resolve("1D-A70", deposition=deposition, n_particles=N)
+    phys = Physics(0.9, 2.0, deposition, -0.0313, 2.0, 0.18)
+    p = step_params(cfg, phys)
+    return cfg, p, constant_bed_table(cfg.theta, phys)
+
+
+@pytest.mark.parametrize("deposition", [False, True])
+def test_constant_slope_step_matches_naive(deposition):
+    rng = np.random.default_rng(7)
+    cfg, p, tab = _constant_case(deposition)
+    x, u, V, V0, nd = _state(rng, dead=(5,))
+    ng = 240
+    dep = np.zeros(ng)
+    dep[20:60] = 1e-5 * (1 + np.sin(np.arange(40)))   # an existing deposit: the bed term acts
+    binv = np.ones(ng)
+    xk, F, depk, _, dt, L = _kernel_step(x, u, V, V0, nd, dep, dep, binv, p, tab)
+    xn, un, Vn, depn, _, h, dt_n, L_n, fr = nv.step(x, u, V, V0, nd, dep, dep, binv, p, tab)
+    assert L == pytest.approx(L_n, rel=1e-14) and dt == pytest.approx(dt_n, rel=1e-13)
+    _compare(F[F_H], h, "depth")
+    _compare(F[F_U], un, "velocity")
+    _compare(xk - x, xn - x, "displacement")
+    _compare(F[F_V], Vn, "volume")
+    _compare(depk, depn, "deposit")
+    if deposition:
+        assert np.count_nonzero(fr) > 5                   # the deposition branch is exercised
+        assert np.sum(F[F_V]) + np.sum(depk) == pytest.approx(np.sum(V) + np.sum(dep), rel=1e-14)
+    assert F[F_U, 5] == 0.0 and xk[5] == x[5]             # an emptied particle stays put
+
+
+def test_path_step_matches_naive_with_width_curvature_and_relative_dt():
+    """A bed table with varying slope, curvature and width (the path model's stage functions)."""
+    rng = np.random.default_rng(11)
+    cfg, p0, _ = _constant_case(True)
+    ns, ds = 60, 0.005
+    s = np.arange(ns) * ds
+    th = np.radians(30.0 - 60.0 * s)
+    tab = np.zeros((N_TABLE, ns))
+    tab[T_SIN], tab[T_COS] = np.sin(th), np.cos(th)
+    tab[T_KAPPA] = 60.0 * np.pi / 180.0
+    tab[T_WIDTH] = 1.0 + 2.0 * s
+    tab[T_DWIDTH] = 2.0
+    tab[T_KACT], tab[T_KPASS] = 0.9, 2.0
+    tab[T_A], tab[T_B] = -0.02 - 0.05 * s, 2.0
+    p = p0._replace(origin=0.01, ds=ds, centripetal=True, has_width=True, dt_relative=True, geometry_step=0.004,
+                    x_min=0.0)
+    x, u, V, V0, nd = _state(rng)
+    ng = 240
+    dep = np.zeros(ng)
+    dep[10:50] = 2e-5
+    c = (np.arange(ng) + 0.5) * p.dx_grid + p.origin
+    binv = 1.0 / (1.0 + 2.0 * c)
+    depb = dep * binv
+    xk, F, depk, depbk, dt, L = _kernel_step(x, u, V, V0, nd, dep, depb, binv, p, tab, ng_env=ng)
+    xn, un, Vn, depn, depbn, h, dt_n, L_n, fr = nv.step(x, u, V, V0, nd, dep, depb, binv, p, tab)
+    assert dt == pytest.approx(dt_n, rel=1e-13)
+    for mine, ref, what in ((F[F_H], h, "depth"), (F[F_U], un, "velocity"), (xk - x, xn - x, "displacement"),
+                            (F[F_V], Vn, "volume"), (depk, depn, "deposit"), (depbk, depbn, "deposit/width")):
+        _compare(mine, ref, what)
+    assert np.count_nonzero(fr) > 5
+
+
+def test_step_params_is_a_typed_record():
+    """The kernels take one NamedTuple, typed field by field (no float-coded flags)."""
+    cfg, p, _ = _constant_case(True)
+    assert isinstance(p, StepParams)
+    assert isinstance(p.back_wall, bool) and isinstance(p.max_steps, int) and isinstance(p.eq12, bool)
+    assert p.tan_phi_basal == pytest.approx(math.tan(math.radians(cfg.material.phi_basal_deg)))
+    assert all(isinstance(v, (bool, int, float)) for v in p)
+
+
+@pytest.mark.slow
+def test_step_vs_naive_without_jit():
+    """The same comparisons with NUMBA_DISABLE_JIT=1: the stages also work as plain Python."""
+    import os
+    import subprocess
+    import sys
+    here = os.path.dirname(__file__)
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", "not slow",
+                          os.path.join(here, "test_step_vs_naive.py")], env=env, capture_output=True, text=True,
+                         timeout=600)
+    assert out.returncode == 0, out.stdout[-2000:] + out.stderr[-2000:]
