@@ -60,6 +60,20 @@ def test_dam_break_coarse_is_stable_and_reports_its_energy():
     assert energy["value"] < 0.05
 
 
+def test_dam_break_adjoint_pair_never_gains_energy_at_8_mm():
+    rows = v.dam_break_adjoint_pair(quick=True)
+    assert {r["check"] for r in rows} == {"dam_break_adjoint_pair"}
+    stable = [r for r in rows if r["quantity"].startswith("stable")][0]
+    assert stable["passed"], stable["note"]
+    energy = [r for r in rows if r["quantity"].startswith("max (E_kin")][0]
+    assert energy["passed"], energy
+
+
+@pytest.mark.slow
+def test_dam_break_adjoint_pair_energy_target_at_4_and_2_mm():
+    _assert_rows(v.dam_break(quick=False, projection="adjoint_pair"))
+
+
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="issue 11, open: the projection's pressure creates energy in the low-"
                                        "viscosity dam break (+6..20 % of E_ref by 0.4 s at 4 mm; 2 mm blows up)")
