@@ -584,14 +584,14 @@ def caption_numbers(results, convergence_dx=None) -> dict:
     run = root / "isph" / "T22-A70.nc"
     if run.is_file():
         def fig5():
-            import xarray as xr
-            from .figures.isph2d import failure_plane_angle
+            from .isph.analysis import failure_plane_angle
             with _open(run) as ds:
-                angle, t = failure_plane_angle(ds, 1.0)
+                fp = failure_plane_angle(ds, t_norm=1.0)
                 rest = float(ds["time_to_rest"].values)
                 tc = float(ds.attrs["t_c"])
-            return (f"failure plane {angle:.1f}° from the bed at t = {t:.2f} s ({angle + 22.0:.1f}° from the "
-                    f"horizontal); time to rest {rest:.2f} s (t_s = {rest / tc:.1f})")
+            return (f"failure plane {fp['angle_horizontal_deg']:.1f}° from the horizontal "
+                    f"({fp['angle_deg']:.1f}° from the bed; particles moving at t = {fp['time']:.2f} s, on their "
+                    f"initial positions); time to rest {rest:.2f} s (t_s = {rest / tc:.1f})")
         guard("fig5", fig5, "isph/T22-A70.nc")
     else:
         nums["fig5"] = missing("isph/T22-A70.nc")
