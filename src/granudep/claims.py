@@ -92,13 +92,12 @@ def _rest_ts(path) -> tuple[float, float]:
 
 def _failure_angle(path) -> tuple[float, float]:
     """Failure-plane inclination from the *horizontal* (Rankine's θ_F = 45° + φ/2 is measured from the
-    horizontal, the plane of the minor principal stress σ3 being vertical): the static/moving boundary's
-    angle from the bed plus the slope angle θ (the boundary rises towards the back wall)."""
-    import xarray as xr
-    from .figures.isph2d import failure_plane_angle
+    horizontal, the major principal stress in the column being vertical): the one definition of
+    `isph.analysis.failure_plane_angle` (the verification table and Fig 5 use it too)."""
+    from .isph.analysis import failure_plane_angle
     with open_dataset(path) as ds:
-        angle, _ = failure_plane_angle(ds, 1.0)
-        return angle + float(ds.attrs["theta_deg"]), float(ds.attrs.get("dx", math.nan))
+        fp = failure_plane_angle(ds, t_norm=1.0)
+        return fp["angle_horizontal_deg"], float(ds.attrs.get("dx", math.nan))
 
 
 def _converged_file(converged_ref: pd.DataFrame | None, case: str) -> str | None:
@@ -204,8 +203,9 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
     if cf:
         conv, dx = _failure_angle(cf)
     rows.append(_row(spec, ours, conv, 1e3 * dx, our_source=f"isph/{spec['case']}.nc" + (f"; {cf}" if cf else ""),
-                     note="from the horizontal (= from the bed + θ), static/moving boundary in the column at t_s = 1 "
-                          "(the paper does not say how it measured it); Rankine 45° + φ/2 = 57.75°"))
+                     note="from the horizontal (= from the bed + θ): boundary, on the initial column, of the particles "
+                          "moving faster than 0.1 m/s at t_s = 1 (the paper does not say how it measured it); "
+                          "Rankine 45° + φ/2 = 57.75°"))
     for cid in [k for k in specs if k.startswith("rest_time_")]:
         spec = specs[cid]
         f = _isph_file(root, spec["case"])

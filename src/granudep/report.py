@@ -3,7 +3,7 @@
 Every number in the summary comes from a file given on the command line (regression tables,
 ``granudep compare`` output, ``granudep verify`` outputs, benchmark files); the paper's values
 come from those files too (the regression tables carry them) or from the package's copies of the
-paper's tables, and the paper's stated Fig 16 maxima from :data:`granudep.compare.PAPER_MAX_ERRORS`
+paper's tables, and the paper's stated Fig 16 maxima from :data:`granudep.da_vs_reference.PAPER_MAX_ERRORS`
 (Section 4.3). A missing input gives an explicit "not available" line, never a crash.
 """
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from ._version import __version__
-from .compare import PAPER_MAX_ERRORS, improvement, max_errors
+from .da_vs_reference import PAPER_MAX_ERRORS, improvement, max_errors
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -107,7 +107,7 @@ def section_compare(compare) -> str:
     if df is None:
         return "\n".join(out) + _missing("comparison table", compare)
     if "reference" not in df.columns:
-        from .compare import source_label
+        from .da_vs_reference import source_label
         df["reference"] = [source_label(p) for p in df["provenance"]]
     out.append(f"Source: `{compare}`. Relative error = (computed − reference)/reference. Runout ΔL/L0 from the gate.\n")
     show = df.copy()
@@ -320,7 +320,7 @@ def _study_rows_isph(folder: Path, dx=None) -> pd.DataFrame:
     """One row per 2D run in ``folder``; with ``dx`` (m) only the runs at those resolutions (the
     configured list: a run left over from an earlier list is not a convergence result)."""
     import xarray as xr
-    from .compare import reference_row
+    from .da_vs_reference import reference_row
     rows = []
     for f in sorted(folder.glob("*.nc")):
         with _open(f) as ds:
@@ -584,14 +584,14 @@ def caption_numbers(results, convergence_dx=None) -> dict:
     run = root / "isph" / "T22-A70.nc"
     if run.is_file():
         def fig5():
-            import xarray as xr
-            from .figures.isph2d import failure_plane_angle
+            from .isph.analysis import failure_plane_angle
             with _open(run) as ds:
-                angle, t = failure_plane_angle(ds, 1.0)
+                fp = failure_plane_angle(ds, t_norm=1.0)
                 rest = float(ds["time_to_rest"].values)
                 tc = float(ds.attrs["t_c"])
-            return (f"failure plane {angle:.1f}° from the bed at t = {t:.2f} s ({angle + 22.0:.1f}° from the "
-                    f"horizontal); time to rest {rest:.2f} s (t_s = {rest / tc:.1f})")
+            return (f"failure plane {fp['angle_horizontal_deg']:.1f}° from the horizontal "
+                    f"({fp['angle_deg']:.1f}° from the bed; particles moving at t = {fp['time']:.2f} s, on their "
+                    f"initial positions); time to rest {rest:.2f} s (t_s = {rest / tc:.1f})")
         guard("fig5", fig5, "isph/T22-A70.nc")
     else:
         nums["fig5"] = missing("isph/T22-A70.nc")

@@ -8,9 +8,9 @@ import pytest
 
 import synthetic_data as syn
 from granudep.claims import paper_claims, scorecard, verdict
-from granudep.compare import (compare, da_reading, matrix_maxima, reading_matrix, reference_from_isph,
+from granudep.da_vs_reference import (compare, da_reading, matrix_maxima, reading_matrix, reference_from_isph,
                               select_reference_runs)
-from granudep.compare import PAPER_MAX_ERRORS
+from granudep.da_vs_reference import PAPER_MAX_ERRORS
 from granudep.da.deposition import self_consistent
 
 

@@ -56,21 +56,29 @@ def test_surface_and_interface_profiles_exact():
     assert np.allclose(yi_all[:10], 0.05)  # all at rest: interface at the free surface
 
 
-def test_failure_plane_angle_planted():
-    """Static particles below a plane at 60° through the gate foot give 60° to within a layer's slope error."""
+def test_fig5_and_claims_quote_the_one_failure_plane(tmp_path):
+    """Particles in front of a plane 35° from the bed through the gate foot move at t = t_c (and have
+    slumped by then): Fig 5's note and the claims scorecard quote isph.analysis.failure_plane_angle,
+    from the horizontal (35° + θ within a layer's slope error)."""
+    from granudep import claims
+    from granudep.isph.analysis import failure_plane_angle
     ds = syn.isph_run(dx=0.004)
     L0, dx = 0.2, 0.004
-    X, Y = np.meshgrid(np.arange(dx / 2, L0, dx), np.arange(dx / 2, 0.14, dx))  # the initial lattice
-    x0, y0 = X.ravel(), Y.ravel()
-    static = y0 < np.tan(np.radians(60.0)) * (L0 - x0)  # behind the plane
-    ds["x"].values[1] = x0
-    ds["y"].values[1] = y0
-    ds["u"].values[1] = np.where(static, 0.0, 1.0)
-    ds["v"].values[1] = 0.0
+    x0, y0 = ds["x"].values[0], ds["y"].values[0]  # the initial lattice
+    moving = x0 > L0 - y0 / np.tan(np.radians(35.0))
     tc = math.sqrt(0.14 / (9.81 * math.cos(math.radians(22))))
-    ang, t = isph2d.failure_plane_angle(ds, t_s=float(ds["time"].values[1]) / tc)
-    assert t == pytest.approx(float(ds["time"].values[1]))
-    assert ang == pytest.approx(60.0, abs=1.0)
+    i = int(np.argmin(np.abs(ds["time"].values - tc)))
+    ds["x"].values[i] = np.where(moving, x0 + 0.05, x0)
+    ds["u"].values[i] = np.where(moving, 1.0, 0.0)
+    ds["v"].values[i] = 0.0
+    fp = failure_plane_angle(ds, t_norm=1.0)
+    assert fp["time"] == pytest.approx(float(ds["time"].values[i]))
+    assert fp["angle_deg"] == pytest.approx(35.0, abs=1.0)
+    assert fp["angle_horizontal_deg"] == pytest.approx(fp["angle_deg"] + 22.0)
+    text = " ".join(t.get_text() for t in isph2d.fig5(ds).texts).lower()
+    assert f"failure plane in this run: {fp['angle_horizontal_deg']:.1f}° from the horizontal" in text
+    angle, _ = claims._failure_angle(syn.save(ds, tmp_path / "T22-A70.nc"))
+    assert angle == pytest.approx(fp["angle_horizontal_deg"])
 
 
 def test_velocity_profile_layer_means(files):

@@ -1,21 +1,18 @@
 """The Snakemake workflow schedules what the paper's method needs (dry runs, no computation).
 
-Each test copies the workflow (Snakefile, workflow/, config/, profiles/, benchmarks/) into a fresh
-folder, so existing results or a running workflow in the checkout cannot change the job counts.
+The workflow is copied once per session into a fresh folder (wfhelp.py), so existing results or a
+running workflow in the checkout cannot change the job counts; the dry runs run in the background
+while the rest of the suite computes (tests/conftest.py, wfhelp.py).
 """
 from __future__ import annotations
 
 import re
-import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 import yaml
 
-ROOT = Path(__file__).resolve().parents[2]
-SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+from wfhelp import dry_run, overlay
+from wfhelp import workdir as _workdir
 
 TABLE1 = ["T10-A35", "T16-A35", "T22-A35", "T16-A50", "T22-A50", "T10-A70", "T22-A70", "T10-A100",
           "T16-A100", "T22-A100", "T10-A120", "T16-A120", "T22-A120", "T22-A150"]
@@ -23,30 +20,69 @@ TABLE5_GEOMETRIES = ["T22-A30", "T22-A45", "T22-A124"]
 FIGURES = ["fig5", "fig7", "fig8", "fig9", "fig10", "fig11", "fig12", "fig13", "fig15", "fig16",
            "fig17", "figA1", "figA2", "figA3"]
 
+SINGLE_TARGETS = [
+    ("results/isph/T22-A70.nc", {"warmup": 1, "isph_run": 1}),
+    ("results/sections/T16-A50.nc", {"warmup": 1, "isph_run": 1, "monitor": 1}),
+    ("results/da/1D-A70_nodeposition.nc", {"warmup": 1, "da_run": 1}),
+]
+STUDY_TARGETS = [
+    ("convergence", "convergence_isph", 4),  # T22-A70 at 4, 3, 2, 1.4 mm (issue 11)
+    ("sensitivity", "sensitivity_da", 11),  # baseline + 2 values x 5 parameters
+]
+USER_CASE = {"user_cases": [{"name": "my-column", "theta_deg": 20, "L0": 0.2, "H0": 0.12}]}
+SCHEMA_REFUSALS = [
+    ({"isph": {"dx": -0.004}}, "isph.dx: isph run 'T10-A35': numerics.dx: must be > 0.0 and <= 0.1 (got -0.004)"),
+    ({"isph": {"cases": ["T22-A70", "bad case"]}}, "isph.cases[1]: must be a 2D ISPH case name"),
+    ({"da": {"cases": ["1D-A70", "T22-A70"]}}, "da.cases[1]: must be a Table 5 DA case name"),
+    ({"da": {"ab_source": "guess"}}, "da.ab_source: must be one of ['paper', 'computed'] (got 'guess')"),
+    ({"user_cases": [{"name": "x", "theta_deg": 20, "L0": 0.2, "H0": 0}]},
+     "user_cases[0].H0: isph run 'x': geometry.H0: must be > 0.0"),
+    ({"isph": {"dxx": 0.004}}, "isph.dxx: unknown key (allowed: cases, dx, dx_per_case, t_end, table5_geometries, threads)"),
+]
+# Issue 14 item 4: each of these passed `snakemake -n` before and was refused only by the job.
+ONE_LINE_REFUSALS = [
+    ("isph: {dx: .nan}\n", "isph.dx: must be a finite number (got nan)"),
+    ("user_cases: [{name: steep, theta_deg: 30, L0: 0.2, H0: 0.1}]\n",
+     "user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_deg = 25.5"),
+    ("user_cases: [{name: big, theta_deg: 20, L0: 7, H0: 0.1}]\n",
+     "user_cases[0].L0: isph run 'big': geometry.L0: must be > 0.0 and <= 5.0 (got 7.0)"),
+    ("da: {n_particles: 500000}\n", "da.n_particles: da run '1D-A30_deposition': numerics.n_particles: "
+                                      "must be >= 20 and <= 200000 (got 500000)"),
+    ("user_cases: [{name: a, theta_deg: 20, L0: 0.2, H0: 0.1}, {name: a, theta_deg: 18, L0: 0.2, H0: 0.1}]\n",
+     "user_cases[1].name: 'a' is already the name of user_cases[0]"),
+    ("reference_tables: [measurements/none.csv]\n", "reference_tables[0]: file not found: measurements/none.csv"),
+    ("sensitivity: {critical_speed: [-1.0]}\n", "sensitivity.critical_speed[0]: sensitivity monitor"),
+    ("monitor: {width_factor: 80}\n", "monitor.width_factor: monitor: monitor.width_factor: must be > 0.0 and <= 50.0"),
+    ("convergence: {dx: [0.2, 0.01]}\n", "convergence.dx[0]: convergence isph run dx = 0.2: numerics.dx: must be"),
+]
+YAML_1_2 = "isph: {dx: 5e-3}\n"
+NO_2D_REFERENCE = {"da": {"cases": ["1D-A70", "1D-A99"]}}
+
+
+def dry_run_args(item) -> list[tuple[str, ...]]:
+    """The dry runs a collected test of this module asks for (tests/conftest.py prefetches them)."""
+    p = getattr(item, "callspec", None)
+    p = p.params if p else {}
+    name = item.originalname
+    cfg = ("-j2", "--configfile")
+    return {
+        "test_default_config_schedules_the_whole_paper": lambda: [("-j2",)],
+        "test_ci_profile_runs_the_whole_chain_small": lambda: [("--profile", "profiles/ci")],
+        "test_single_targets_run_only_what_they_need": lambda: [("-j2", p["target"])],
+        "test_slurm_profile_dry_runs": lambda: [("--profile", "profiles/slurm")],
+        "test_extra_study_targets_dry_run": lambda: [("-j2", p["target"])],
+        "test_user_case_gets_2d_and_da_runs": lambda: [(*cfg, str(overlay(USER_CASE)))],
+        "test_schema_rejects_bad_config_naming_the_key": lambda: [(*cfg, str(overlay(p["content"])))],
+        "test_dry_run_refuses_what_the_jobs_would_in_one_line": lambda: [(*cfg, str(overlay(p["content"])))],
+        "test_dry_run_reads_yaml_1_2_numbers": lambda: [("-j2", "results/isph/T22-A70.nc", "--configfile",
+                                                         str(overlay(YAML_1_2)))],
+        "test_da_case_without_2d_reference_is_refused": lambda: [(*cfg, str(overlay(NO_2D_REFERENCE)))],
+    }.get(name, lambda: [])()
+
 
 @pytest.fixture(scope="module")
-def workdir(tmp_path_factory) -> Path:
-    d = tmp_path_factory.mktemp("wf")
-    shutil.copy(ROOT / "Snakefile", d / "Snakefile")
-    for sub in ("workflow", "config", "profiles", "benchmarks"):
-        shutil.copytree(ROOT / sub, d / sub)
-    return d
-
-
-def dry_run(workdir: Path, *args: str) -> tuple[int, str, dict[str, int]]:
-    """`snakemake -n` in workdir; returns exit code, output and the job-count table."""
-    proc = subprocess.run(SNAKEMAKE + ["-n", "-p", "--nolock", *args], cwd=workdir,
-                          capture_output=True, text=True, timeout=120)
-    out = proc.stdout + proc.stderr
-    counts = {}
-    if "Job stats:" in out:
-        table = out.split("Job stats:", 1)[1]
-        for line in table.splitlines()[3:]:
-            m = re.match(r"^(\S+)\s+(\d+)$", line.strip())
-            if not m:
-                break
-            counts[m.group(1)] = int(m.group(2))
-    return proc.returncode, out, counts
+def workdir():
+    return _workdir()
 
 
 def test_default_config_schedules_the_whole_paper(workdir):
@@ -91,13 +127,11 @@ def test_ci_profile_runs_the_whole_chain_small(workdir):
                 if src == "computed" else "--ab-source paper")
     assert f"granudep da 1D-A70 {expected} --n-particles 200" in out
     assert "granudep verify isph --quick" in out
+    # the summary also as HTML: the Snakemake report shows an .html result rendered (issue 14)
+    assert "granudep summary -o results/summary.md --html results/summary.html" in out
 
 
-@pytest.mark.parametrize("target, expected", [
-    ("results/isph/T22-A70.nc", {"warmup": 1, "isph_run": 1}),
-    ("results/sections/T16-A50.nc", {"warmup": 1, "isph_run": 1, "monitor": 1}),
-    ("results/da/1D-A70_nodeposition.nc", {"warmup": 1, "da_run": 1}),
-])
+@pytest.mark.parametrize("target, expected", SINGLE_TARGETS)
 def test_single_targets_run_only_what_they_need(workdir, target, expected):
     rc, out, jobs = dry_run(workdir, "-j2", target)
     assert rc == 0, out
@@ -117,21 +151,15 @@ def test_slurm_profile_dry_runs(workdir):
     assert out.count("cpus_per_task=4") >= jobs["isph_run"]
 
 
-@pytest.mark.parametrize("target, rule, count", [
-    ("convergence", "convergence_isph", 4),  # T22-A70 at 4, 3, 2, 1.4 mm (issue 11)
-    ("sensitivity", "sensitivity_da", 11),  # baseline + 2 values x 5 parameters
-])
+@pytest.mark.parametrize("target, rule, count", STUDY_TARGETS)
 def test_extra_study_targets_dry_run(workdir, target, rule, count):
     rc, out, jobs = dry_run(workdir, "-j2", target)
     assert rc == 0, out
     assert jobs[rule] == count
 
 
-def test_user_case_gets_2d_and_da_runs(workdir, tmp_path):
-    overlay = tmp_path / "user.yaml"
-    overlay.write_text(yaml.safe_dump({"user_cases": [
-        {"name": "my-column", "theta_deg": 20, "L0": 0.2, "H0": 0.12}]}))
-    rc, out, jobs = dry_run(workdir, "-j2", "--configfile", str(overlay))
+def test_user_case_gets_2d_and_da_runs(workdir):
+    rc, out, jobs = dry_run(workdir, "-j2", "--configfile", str(overlay(USER_CASE)))
     assert rc == 0, out
     assert jobs["isph_run"] == len(TABLE1) + len(TABLE5_GEOMETRIES) + 1
     assert jobs["user_case_config"] == 1
@@ -139,18 +167,9 @@ def test_user_case_gets_2d_and_da_runs(workdir, tmp_path):
     assert re.search(r"granudep da results/user_cases/my-column.yaml --ab-source computed", out)
 
 
-@pytest.mark.parametrize("overlay, key", [
-    ({"isph": {"dx": -0.004}}, "isph.dx: isph run 'T10-A35': numerics.dx: must be > 0.0 and <= 0.1 (got -0.004)"),
-    ({"isph": {"cases": ["T22-A70", "bad case"]}}, "isph.cases[1]: must be a 2D ISPH case name"),
-    ({"da": {"cases": ["1D-A70", "T22-A70"]}}, "da.cases[1]: must be a Table 5 DA case name"),
-    ({"da": {"ab_source": "guess"}}, "da.ab_source: must be one of ['paper', 'computed'] (got 'guess')"),
-    ({"user_cases": [{"name": "x", "theta_deg": 20, "L0": 0.2, "H0": 0}]},
-     "user_cases[0].H0: isph run 'x': geometry.H0: must be > 0.0"),
-    ({"isph": {"dxx": 0.004}}, "isph.dxx: unknown key (allowed: cases, dx, dx_per_case, t_end, table5_geometries, threads)"),
-])
-def test_schema_rejects_bad_config_naming_the_key(workdir, tmp_path, overlay, key):
-    path = tmp_path / "bad.yaml"
-    path.write_text(yaml.safe_dump(overlay))
+@pytest.mark.parametrize("content, key", SCHEMA_REFUSALS)
+def test_schema_rejects_bad_config_naming_the_key(workdir, content, key):
+    path = overlay(content)
     rc, out, jobs = dry_run(workdir, "-j2", "--configfile", str(path))
     assert rc == 2, out
     assert f"granudep: {path}: {key}" in out, out
@@ -161,25 +180,9 @@ def _refusal_lines(out: str) -> list[str]:
     return [ln for ln in out.splitlines() if ln.strip() and "is extended by additional config" not in ln]
 
 
-# Issue 14 item 4: each of these passed `snakemake -n` before and was refused only by the job.
-@pytest.mark.parametrize("overlay, expected", [
-    ("isph: {dx: .nan}\n", "isph.dx: must be a finite number (got nan)"),
-    ("user_cases: [{name: steep, theta_deg: 30, L0: 0.2, H0: 0.1}]\n",
-     "user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_deg = 25.5"),
-    ("user_cases: [{name: big, theta_deg: 20, L0: 7, H0: 0.1}]\n",
-     "user_cases[0].L0: isph run 'big': geometry.L0: must be > 0.0 and <= 5.0 (got 7.0)"),
-    ("da: {n_particles: 500000}\n", "da.n_particles: da run '1D-A30_deposition': numerics.n_particles: "
-                                      "must be >= 20 and <= 200000 (got 500000)"),
-    ("user_cases: [{name: a, theta_deg: 20, L0: 0.2, H0: 0.1}, {name: a, theta_deg: 18, L0: 0.2, H0: 0.1}]\n",
-     "user_cases[1].name: 'a' is already the name of user_cases[0]"),
-    ("reference_tables: [measurements/none.csv]\n", "reference_tables[0]: file not found: measurements/none.csv"),
-    ("sensitivity: {critical_speed: [-1.0]}\n", "sensitivity.critical_speed[0]: sensitivity monitor"),
-    ("monitor: {width_factor: 80}\n", "monitor.width_factor: monitor: monitor.width_factor: must be > 0.0 and <= 50.0"),
-    ("convergence: {dx: [0.2, 0.01]}\n", "convergence.dx[0]: convergence isph run dx = 0.2: numerics.dx: must be"),
-])
-def test_dry_run_refuses_what_the_jobs_would_in_one_line(workdir, tmp_path, overlay, expected):
-    path = tmp_path / "bad.yaml"
-    path.write_text(overlay)
+@pytest.mark.parametrize("content, expected", ONE_LINE_REFUSALS)
+def test_dry_run_refuses_what_the_jobs_would_in_one_line(workdir, content, expected):
+    path = overlay(content)
     rc, out, jobs = dry_run(workdir, "-j2", "--configfile", str(path))
     assert rc == 2, out
     lines = _refusal_lines(out)
@@ -188,16 +191,14 @@ def test_dry_run_refuses_what_the_jobs_would_in_one_line(workdir, tmp_path, over
     assert not jobs
 
 
-def test_dry_run_reads_yaml_1_2_numbers(workdir, tmp_path):
-    path = tmp_path / "ok.yaml"
-    path.write_text("isph: {dx: 5e-3}\n")
+def test_dry_run_reads_yaml_1_2_numbers(workdir):
+    path = overlay(YAML_1_2)
     rc, out, jobs = dry_run(workdir, "-j2", "results/isph/T22-A70.nc", "--configfile", str(path))
     assert rc == 0, out
     assert "--dx 0.005" in out
 
 
-def test_da_case_without_2d_reference_is_refused(workdir, tmp_path):
-    path = tmp_path / "bad.yaml"
-    path.write_text(yaml.safe_dump({"da": {"cases": ["1D-A70", "1D-A99"]}}))
+def test_da_case_without_2d_reference_is_refused(workdir):
+    path = overlay(NO_2D_REFERENCE)
     rc, out, jobs = dry_run(workdir, "-j2", "--configfile", str(path))
     assert rc != 0 and "da.reference_2d" in out and "1D-A99" in out, out

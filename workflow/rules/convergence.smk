@@ -5,47 +5,42 @@ CONV = config["convergence"]
 CONV_DIR = f"{RESULTS}/convergence"
 
 
-rule convergence_isph:
+# The chain isph -> monitor -> regress and the DA runs are the main rules (isph.smk, monitor.smk,
+# regress.smk, da.smk) with other file names and the spacing / particle count from the wildcards.
+
+
+use rule isph_run as convergence_isph with:
     input:
         warm=WARM,
     output:
         f"{CONV_DIR}/isph/{{case}}_dx{{dx}}.nc",
     params:
-        t_end=lambda wc: f"--t-end {config['isph']['t_end']}" if config["isph"].get("t_end") else "",
+        source=lambda wc: wc.case,
+        dx=lambda wc: wc.dx,
     log:
         f"{LOGS}/convergence/isph/{{case}}_dx{{dx}}.log",
     benchmark:
         f"{BENCH}/convergence/isph/{{case}}_dx{{dx}}.tsv"
-    threads: config["isph"]["threads"]
     resources:
         runtime=480,
         mem_mb=8000,
-    shell:
-        "NUMBA_NUM_THREADS={threads} granudep isph {wildcards.case} --dx {wildcards.dx} {params.t_end}"
-        " -o {output} > {log} 2>&1"
 
 
-rule convergence_monitor:
+use rule monitor as convergence_monitor with:
     input:
         warm=WARM,
         run=f"{CONV_DIR}/isph/{{case}}_dx{{dx}}.nc",
     output:
         f"{CONV_DIR}/sections/{{case}}_dx{{dx}}.nc",
-    params:
-        width_factor=config["monitor"]["width_factor"],
     log:
         f"{LOGS}/convergence/sections/{{case}}_dx{{dx}}.log",
     benchmark:
         f"{BENCH}/convergence/sections/{{case}}_dx{{dx}}.tsv"
-    threads: 1
-    shell:
-        "NUMBA_NUM_THREADS={threads} granudep monitor {input.run} --width-factor {params.width_factor}"
-        " -o {output} > {log} 2>&1"
 
 
-rule convergence_regress:
+use rule regress as convergence_regress with:
     input:
-        f"{CONV_DIR}/sections/{{case}}_dx{{dx}}.nc",
+        sections=f"{CONV_DIR}/sections/{{case}}_dx{{dx}}.nc",
     output:
         critical=f"{CONV_DIR}/regression/{{case}}_dx{{dx}}/critical.csv",
         coefficients=f"{CONV_DIR}/regression/{{case}}_dx{{dx}}/coefficients.csv",
@@ -55,26 +50,22 @@ rule convergence_regress:
         f"{LOGS}/convergence/regression/{{case}}_dx{{dx}}.log",
     benchmark:
         f"{BENCH}/convergence/regression/{{case}}_dx{{dx}}.tsv"
-    threads: 1
-    shell:
-        "granudep regress {input} -o {params.outdir} > {log} 2>&1"
 
 
-rule convergence_da:
+use rule da_run as convergence_da with:
     input:
         warm=WARM,
     output:
         f"{CONV_DIR}/da/{{case}}_n{{n}}_{{variant}}.nc",
     params:
+        source=lambda wc: wc.case,
         options=lambda wc: "--no-deposition" if wc.variant == "nodeposition" else "--ab-source paper",
+        n_particles=lambda wc: wc.n,
     log:
         f"{LOGS}/convergence/da/{{case}}_n{{n}}_{{variant}}.log",
     benchmark:
         f"{BENCH}/convergence/da/{{case}}_n{{n}}_{{variant}}.tsv"
     threads: 1
-    shell:
-        "NUMBA_NUM_THREADS={threads} granudep da {wildcards.case} {params.options} --n-particles {wildcards.n}"
-        " -o {output} > {log} 2>&1"
 
 
 CONVERGENCE_INPUTS = (

@@ -10,6 +10,7 @@ rule monitor:
         f"{RESULTS}/sections/{{case}}.nc",
     params:
         width_factor=config["monitor"]["width_factor"],
+        options="",  # extra `granudep monitor` options (the sensitivity runs set one)
     log:
         f"{LOGS}/sections/{{case}}.log",
     benchmark:
@@ -20,7 +21,7 @@ rule monitor:
         mem_mb=4000,
     shell:
         "NUMBA_NUM_THREADS={threads} granudep monitor {input.run} --width-factor {params.width_factor}"
-        " -o {output} > {log} 2>&1"
+        " {params.options} -o {output} > {log} 2>&1"
 
 
 rule monitor_wm:

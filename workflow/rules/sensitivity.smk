@@ -79,52 +79,48 @@ rule sensitivity_config:
             fh.write(f"wrote {output[0]}\n")
 
 
-rule sensitivity_isph:
+# The chain isph -> monitor -> regress -> da is the main rules (isph.smk, monitor.smk, regress.smk,
+# da.smk) with the run's config file, the sensitivity dx and the monitor option of {sens}.
+
+
+use rule isph_run as sensitivity_isph with:
     input:
         warm=WARM,
         config=f"{SENS_DIR}/config/isph_{{sens}}.yaml",
     output:
         f"{SENS_DIR}/isph/{{sens}}.nc",
     params:
+        source=lambda wc, input: input.config,
         dx=SENS["dx"],
+        t_end="",
     log:
         f"{LOGS}/sensitivity/isph/{{sens}}.log",
     benchmark:
         f"{BENCH}/sensitivity/isph/{{sens}}.tsv"
-    threads: config["isph"]["threads"]
-    resources:
-        runtime=240,
-        mem_mb=4000,
-    shell:
-        "NUMBA_NUM_THREADS={threads} granudep isph {input.config} --dx {params.dx} -o {output} > {log} 2>&1"
 
 
-rule sensitivity_monitor:
+def sens_monitor_options(wc):
+    param, value = sens_split(wc.sens)
+    return f"{SENS_MONITOR_OPTIONS[param]} {value}" if param in SENS_MONITOR_OPTIONS else ""
+
+
+use rule monitor as sensitivity_monitor with:
     input:
         warm=WARM,
         run=lambda wc: f"{SENS_DIR}/isph/{sens_isph_run(wc.sens)}.nc",
     output:
         f"{SENS_DIR}/sections/{{sens}}.nc",
     params:
-        width_factor=config["monitor"]["width_factor"],
-        options=lambda wc: (
-            f"{SENS_MONITOR_OPTIONS[sens_split(wc.sens)[0]]} {sens_split(wc.sens)[1]}"
-            if sens_split(wc.sens)[0] in SENS_MONITOR_OPTIONS
-            else ""
-        ),
+        options=sens_monitor_options,
     log:
         f"{LOGS}/sensitivity/sections/{{sens}}.log",
     benchmark:
         f"{BENCH}/sensitivity/sections/{{sens}}.tsv"
-    threads: 1
-    shell:
-        "NUMBA_NUM_THREADS={threads} granudep monitor {input.run} --width-factor {params.width_factor}"
-        " {params.options} -o {output} > {log} 2>&1"
 
 
-rule sensitivity_regress:
+use rule regress as sensitivity_regress with:
     input:
-        f"{SENS_DIR}/sections/{{sens}}.nc",
+        sections=f"{SENS_DIR}/sections/{{sens}}.nc",
     output:
         critical=f"{SENS_DIR}/regression/{{sens}}/critical.csv",
         coefficients=f"{SENS_DIR}/regression/{{sens}}/coefficients.csv",
@@ -134,12 +130,9 @@ rule sensitivity_regress:
         f"{LOGS}/sensitivity/regression/{{sens}}.log",
     benchmark:
         f"{BENCH}/sensitivity/regression/{{sens}}.tsv"
-    threads: 1
-    shell:
-        "granudep regress {input} -o {params.outdir} > {log} 2>&1"
 
 
-rule sensitivity_da:
+use rule da_run as sensitivity_da with:
     input:
         warm=WARM,
         config=f"{SENS_DIR}/config/da_{{sens}}.yaml",
@@ -147,15 +140,13 @@ rule sensitivity_da:
     output:
         f"{SENS_DIR}/da/{{sens}}.nc",
     params:
-        n_particles=config["da"]["n_particles"],
+        source=lambda wc, input: input.config,
+        options=lambda wc, input: f"--ab-source computed --coefficients {input.coefficients}",
     log:
         f"{LOGS}/sensitivity/da/{{sens}}.log",
     benchmark:
         f"{BENCH}/sensitivity/da/{{sens}}.tsv"
     threads: 1
-    shell:
-        "NUMBA_NUM_THREADS={threads} granudep da {input.config} --ab-source computed"
-        " --coefficients {input.coefficients} --n-particles {params.n_particles} -o {output} > {log} 2>&1"
 
 
 rule sensitivity_table:
@@ -166,7 +157,6 @@ rule sensitivity_table:
     output:
         f"{SENS_DIR}/sensitivity.csv",
     params:
-        python=sys.executable,
         baseline=" ".join(f"{k}={v}" for k, v in SENS["paper_values"].items()),
         runs=" ".join(
             f"{r}={SENS_DIR}/regression/{r}/coefficients.csv,{SENS_DIR}/da/{r}.nc" for r in SENS_RUNS
@@ -177,8 +167,7 @@ rule sensitivity_table:
         f"{BENCH}/sensitivity/table.tsv"
     threads: 1
     shell:
-        "{params.python} workflow/scripts/sensitivity_table.py -o {output} --baseline-values {params.baseline}"
-        " -- {params.runs} > {log} 2>&1"
+        "granudep sensitivity-table -o {output} --baseline-values {params.baseline} -- {params.runs} > {log} 2>&1"
 
 
 rule figure_sensitivity:

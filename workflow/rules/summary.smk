@@ -21,6 +21,8 @@ rule summary:
                             if os.path.exists(p)],
     output:
         md=report(f"{RESULTS}/summary.md", category="Summary"),
+        # the same text rendered: the Snakemake report shows an HTML result inline (a .md only as a download)
+        html=report(f"{RESULTS}/summary.html", category="Summary"),
         # our numbers quoted by the report captions (read back in common.smk)
         captions=f"{RESULTS}/caption_numbers.json",
         # the claims scorecard (granudep.claims): every quantitative claim of the paper vs ours
@@ -44,7 +46,7 @@ rule summary:
         runtime=10,
         mem_mb=2000,
     shell:
-        "granudep summary -o {output.md} --regression {params.regression} --compare {input.compare}"
+        "granudep summary -o {output.md} --html {output.html} --regression {params.regression} --compare {input.compare}"
         " --verification {input.verification} --benchmarks {params.benchmarks}"
         " --convergence {params.convergence} --convergence-dx {params.convergence_dx}"
         " --convergence-n {params.convergence_n} --sensitivity {params.sensitivity}"

@@ -8,7 +8,7 @@ from ..progress import LOG
 
 
 def _cmd_reference(args) -> int:
-    from ..compare import reference_from_isph, select_reference_runs
+    from ..da_vs_reference import reference_from_isph, select_reference_runs
     from ..io import write_text
     runs = args.runs
     if args.finest or args.dx is not None:
@@ -22,7 +22,7 @@ def _cmd_reference(args) -> int:
 
 
 def _cmd_compare(args) -> int:
-    from ..compare import compare, matrix_maxima, reading_matrix, report_text
+    from ..da_vs_reference import compare, matrix_maxima, reading_matrix, report_text
     from ..io import write_text
     table = compare(list(args.runs) + list(args.readings or []), args.reference)
     main = table
@@ -71,6 +71,10 @@ def _cmd_summary(args) -> int:
                          matrix=args.matrix, maxima=args.maxima, claims=card, diagnosis=args.diagnosis)
     write_text(text, args.output)
     LOG.info("summary written to %s", args.output)
+    if args.html:
+        from ..markdown_html import to_html
+        write_text(to_html(text, title="granudep summary"), args.html)
+        LOG.info("summary (HTML) written to %s", args.html)
     if args.caption_numbers:
         import json
         from ..report import caption_numbers
@@ -132,6 +136,8 @@ def register(sub) -> None:
 
     p = sub.add_parser("summary", help="Markdown summary: paper-vs-ours tables, verification, figures")
     p.add_argument("-o", "--output", required=True, metavar="summary.md")
+    p.add_argument("--html", metavar="summary.html",
+                   help="also write the summary as a standalone HTML page (shown rendered in the Snakemake report)")
     p.add_argument("--regression", metavar="DIR", help="granudep regress output folder")
     p.add_argument("--convergence", metavar="DIR", help="convergence study folder (isph/, regression/, da/)")
     p.add_argument("--convergence-dx", nargs="+", type=_positive_float, metavar="DX",

@@ -2,7 +2,8 @@
 
 * Fig 5: free surface of T22-A70 at several times (the paper overlays Farin et al. 2014 profiles,
   which are not available to us), plus the failure plane: the boundary between static and moving
-  particles inside the initial column early in the collapse, against Rankine's 45° + φ/2.
+  particles inside the initial column early in the collapse (`isph.analysis.failure_plane_angle`, from
+  the horizontal), against Rankine's 45° + φ/2.
 * Fig 7 / A3: particles coloured flowing/deposited (speed threshold 0.1 m/s, Section 2.2) with the
   F/D interface (dashed) at several t_s, one column of panels per case. The interface drawn here is
   a display estimate from the particles (top of the deposited layer under the flowing one, per
@@ -18,6 +19,7 @@ import math
 import numpy as np
 
 from ..config import ConfigError
+from ..isph.analysis import failure_plane_angle
 from .common import (CRITICAL_SPEED, add_inputs, case_of, classify, colours, hide_unused, load, need,
                      new_figure, note, panel_label, register, scales)
 
@@ -76,38 +78,6 @@ def rest_time(ds) -> float:
     return t if math.isfinite(t) else float(ds["time"].values[-1])
 
 
-def failure_plane_angle(ds, t_s: float = 1.0) -> tuple[float, float]:
-    """Inclination (deg, from the bed) of the static/moving boundary inside the initial column at
-    the output time nearest ``t_s``: per dx-thick layer the down-slope edge of the static block at
-    the back wall, then a least-squares line through those edges. Returns (angle, time used)."""
-    sc = scales(ds)
-    time = ds["time"].values
-    i = _time_index(time, t_s * sc["tc"])
-    dx = float(ds.attrs["dx"])
-    x, y = ds["x"].values[i], ds["y"].values[i]
-    static = np.hypot(ds["u"].values[i], ds["v"].values[i]) < CRITICAL_SPEED
-    layers = np.arange(0.0, sc["H0"], dx)
-    xs, ys = [], []
-    for y0 in layers:
-        inl = (y >= y0) & (y < y0 + dx) & (x <= sc["L0"])
-        if not inl.any():
-            continue
-        order = np.argsort(x[inl])
-        st = static[inl][order]
-        if not st[0]:  # the layer moves at the back wall already
-            continue
-        # contiguous static block from the back wall
-        k = np.flatnonzero(~st)
-        edge = x[inl][order][(k[0] - 1) if k.size else -1] + 0.5 * dx
-        if edge < sc["L0"] - dx:  # the boundary lies inside the column (not at the gate)
-            xs.append(edge)
-            ys.append(y0 + 0.5 * dx)
-    if len(xs) < 3:
-        return float("nan"), float(time[i])
-    slope = np.polyfit(np.asarray(xs), np.asarray(ys), 1)[0]
-    return math.degrees(math.atan(abs(slope))), float(time[i])
-
-
 def fig5(run, times=None, failure_t_s: float = 1.0):
     """Free surface at several times (slope-aligned frame) with the failure plane."""
     ds = load(run)
@@ -128,13 +98,22 @@ def fig5(run, times=None, failure_t_s: float = 1.0):
     ax.text(sc["L0"], sc["H0"] * 1.02, "gate", ha="center", va="bottom", fontsize=8, color="0.4")
     phi = math.degrees(math.atan(float(ds.attrs["mu_s"]))) if "mu_s" in ds.attrs else float("nan")
     rankine = 45.0 + phi / 2
-    angle, t_fp = failure_plane_angle(ds, failure_t_s)
+    fp = failure_plane_angle(ds, t_norm=failure_t_s)
+    angle, angle_bed, t_fp = fp["angle_horizontal_deg"], fp["angle_deg"], fp["time"]
     if math.isfinite(rankine):
-        xr_ = np.array([sc["L0"] - sc["H0"] / math.tan(math.radians(rankine)), sc["L0"]])
+        # Rankine's angle is from the horizontal; in the slope-aligned frame the plane is rankine − θ from the bed
+        xr_ = np.array([sc["L0"] - sc["H0"] / math.tan(math.radians(rankine - sc["theta_deg"])), sc["L0"]])
         ax.plot(xr_, [sc["H0"], 0.0], color="k", ls="--", lw=1,
-                label=f"Rankine failure plane 45° + φ/2 = {rankine:.2f}° (φ = atan μ_s = {phi:.1f}°)")
-    txt = (f"failure plane in this run: {angle:.1f}° (static/moving boundary at t = {t_fp:.2f} s); "
-           f"paper's 2D SPH: {PAPER_FAILURE_PLANE_DEG}°, paper's Rankine value 57.75°") if math.isfinite(angle) else \
+                label=f"Rankine failure plane 45° + φ/2 = {rankine:.2f}° from the horizontal (φ = atan μ_s = {phi:.1f}°)")
+    if math.isfinite(angle_bed):
+        # the fitted plane in the initial column (slope-aligned frame: its angle from the bed)
+        xf = np.array([fp["toe_x"] - sc["H0"] / math.tan(math.radians(angle_bed)), fp["toe_x"]])
+        ax.plot(xf, [sc["H0"], 0.0], color="C3", ls="-", lw=1,
+                label=f"failure plane in this run: {angle:.1f}° from the horizontal")
+    txt = (f"failure plane in this run: {angle:.1f}° from the horizontal ({angle_bed:.1f}° from the bed; "
+           f"boundary of the particles moving faster than {CRITICAL_SPEED:g} m/s at t = {t_fp:.2f} s, "
+           f"on their initial positions); paper's 2D SPH: {PAPER_FAILURE_PLANE_DEG}°, paper's Rankine value "
+           f"57.75°") if math.isfinite(angle) else \
         "failure plane: no static/moving boundary found inside the column"
     ax.set_title(f"{case_of(ds)}: a = {sc['H0'] / sc['L0']:.2f}, θ = {sc['theta_deg']:g}°, dx = {dx:g} m",
                  loc="left", fontsize=10)

@@ -1,4 +1,15 @@
-"""Post-processing of ISPH runs: the initial failure plane of the column (Section 4.2.2)."""
+"""Post-processing of ISPH runs: the initial failure plane of the column (Section 4.2.2).
+
+One definition, used by the verification table (``granudep verify isph``), Fig 5 and its caption
+and the claims scorecard. The paper's failure plane is the Rankine surface that bounds "the initial
+amount of flowing mass" (Section 4.2.2, θ_F = π/4 + φ/2 = 57.75° for φ = 25.5°, from the
+horizontal: the major principal stress in the column is vertical). It is a *material* surface of
+the initial column: it separates the particles that the collapse mobilises from those that stay in
+the static block behind it. So it is measured on the particles' *initial* positions (x0, y0), not
+on where they are at the time of measurement (the moving wedge has already slumped and sheared by
+then), and reported from the horizontal (angle from the bed + θ). Decision and numbers:
+docs/paper-notes.md, "Failure plane".
+"""
 from __future__ import annotations
 
 import math
@@ -6,21 +17,34 @@ import math
 import numpy as np
 import xarray as xr
 
+from ..cases import characteristic_time
 
-def failure_plane_angle(ds: xr.Dataset, t_norm: float = 1.0, v_crit: float = 0.1) -> dict:
-    """Inclination (from the bed) of the surface separating moving and static column particles.
+#: the paper's flow/deposit speed threshold (Section 2.2), m/s
+CRITICAL_SPEED = 0.1
 
-    At t = t_norm t_c the particles faster than ``v_crit`` (the paper's 0.1 m/s flow/deposit
-    threshold, Section 2.2) are 'moving'. In bands of initial height y0 in [0.1, 0.9] H0, the
-    failure surface position is the smallest initial x0 of a moving particle; a straight line
-    x0 = c − y0 cot(θ_F) fitted through the band points gives θ_F (Rankine: 45° + φ/2).
+
+def failure_plane_angle(ds: xr.Dataset, t_norm: float = 1.0, v_crit: float = CRITICAL_SPEED) -> dict:
+    """Inclination of the surface separating moving and static column particles.
+
+    At the output time nearest t = t_norm t_c the particles faster than ``v_crit`` (the paper's
+    0.1 m/s flow/deposit threshold, Section 2.2) are 'moving'. In dx-thick bands of *initial*
+    height y0 in [0.1, 0.9] H0, the failure surface position is the smallest initial x0 of a moving
+    particle; a least-squares line x0 = c − y0 cot(β) through the band points gives β, the angle
+    from the bed (slope-aligned frame); from the horizontal it is β + θ (Rankine: 45° + φ/2).
+
+    Returns a dict: ``angle_deg`` (β, from the bed), ``angle_horizontal_deg`` (β + θ), ``time``
+    (the output time used, s), ``points`` (bands in the fit) and ``toe_x`` (c, where the fitted
+    plane meets the bed, m). NaN angles when fewer than 3 bands have moving particles or the
+    fitted surface does not rise towards the back wall.
     """
-    tc = float(ds.attrs["t_c"])
-    k = int(np.argmin(np.abs(ds.time.values - t_norm * tc)))
-    x0 = ds.x.isel(time=0).values.astype(float)
-    y0 = ds.y.isel(time=0).values.astype(float)
-    sp = np.hypot(ds.u.isel(time=k).values, ds.v.isel(time=k).values)
     H0, dx = float(ds.attrs["H0"]), float(ds.attrs["dx"])
+    theta = float(ds.attrs.get("theta_deg", 0.0))
+    tc = float(ds.attrs["t_c"]) if "t_c" in ds.attrs else characteristic_time(H0, math.radians(theta))
+    time = np.asarray(ds["time"].values, float)
+    k = int(np.argmin(np.abs(time - t_norm * tc)))
+    x0 = np.asarray(ds["x"].isel(time=0).values, float)
+    y0 = np.asarray(ds["y"].isel(time=0).values, float)
+    sp = np.hypot(np.asarray(ds["u"].isel(time=k).values, float), np.asarray(ds["v"].isel(time=k).values, float))
     moving = sp > v_crit
     ys, xs = [], []
     for lo in np.arange(0.1 * H0, 0.9 * H0, dx):
@@ -28,8 +52,13 @@ def failure_plane_angle(ds: xr.Dataset, t_norm: float = 1.0, v_crit: float = 0.1
         if band.any():
             ys.append(float(np.mean(y0[band])))
             xs.append(float(np.min(x0[band])))
+    nan = float("nan")
+    out = {"angle_deg": nan, "angle_horizontal_deg": nan, "time": float(time[k]), "points": len(ys), "toe_x": nan}
     if len(ys) < 3:
-        return {"angle_deg": float("nan"), "time": float(ds.time[k]), "points": 0}
-    slope, _ = np.polyfit(ys, xs, 1)  # dx0/dy0 = -cot(theta_F)
-    angle = math.degrees(math.atan2(1.0, -slope)) if slope < 0 else float("nan")
-    return {"angle_deg": angle, "time": float(ds.time[k]), "points": len(ys)}
+        out["points"] = 0
+        return out
+    slope, intercept = np.polyfit(ys, xs, 1)  # dx0/dy0 = -cot(beta)
+    if slope < 0:
+        angle = math.degrees(math.atan2(1.0, -slope))
+        out.update(angle_deg=angle, angle_horizontal_deg=angle + theta, toe_x=float(intercept))
+    return out

@@ -11,7 +11,7 @@ import yaml
 from ..config import ConfigError, build, to_dict
 from ..io import open_dataset, provenance, write_netcdf, write_text
 from .coefficients import coefficient_table, coefficients_dataset
-from .compare import table3_comparison, table5_comparison
+from .paper_tables import table3_comparison, table5_comparison
 from .config import RegressConfig
 from .critical import critical_table
 

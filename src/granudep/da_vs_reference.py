@@ -1,0 +1,520 @@
+"""Fig 15/16 comparison: DA runs against reference runouts and flow times.
+
+Two steps, both plain tables:
+
+* :func:`reference_from_isph` turns 2D ISPH runs of the Table 5 geometries into a *reference
+  table* (one row per run): ``case`` (the Table 5 name, e.g. ``1D-A70``), ``a``, ``theta_deg``,
+  ``final_runout_norm`` (ΔL/L0 with ΔL = x_front,final − L0), ``flow_time`` [s],
+  ``flow_time_norm`` (t_F/t_c), ``front_definition`` and ``provenance``.
+* :func:`compare` matches every DA run (attrs ``case``, ``deposition``) with every reference row of
+  the same case and gives the relative errors (computed − reference)/reference of the final runout
+  and of the flow time, one row per (run, reference provenance).
+
+Any reference table with the columns ``case``, ``final_runout_norm``, ``flow_time`` (or
+``flow_time_norm``) and ``provenance`` can be dropped in (e.g. a user's measurements);
+:func:`load_reference` refuses others naming the missing column. The paper's Farin et al. (2014)
+measurements are not available to us and are never invented nor back-computed.
+
+Front and flow time are the shared definitions of :mod:`granudep.front` for both models, so the
+2D reference and the DA runs are compared like with like; the front definition travels with every
+number (column ``front_definition``).
+"""
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Iterable
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from . import cases
+from .config import ConfigError
+from .front import flow_time as _flow_time
+from .io import open_dataset
+from .progress import LOG
+
+#: the maximum relative errors the paper states in Section 4.3 (vs Farin et al. 2014 measurements)
+PAPER_MAX_ERRORS = {
+    # variant: (runout error, case a, flow-time error, case a)
+    "no deposition": {"runout": 0.55, "runout_a": 0.7, "flow_time": 1.07, "flow_time_a": 1.24},
+    "deposition": {"runout": 0.17, "runout_a": 0.45, "flow_time": 0.69, "flow_time_a": 1.24},
+}
+
+#: the robust front measures (granudep.front.front_measures) carried by 2D and DA files, short names
+MEASURES = ("2d", "5mm", "v99", "tail")
+#: the measure whose runout the reading matrix and the scorecard read first (the paper's front is a
+#: thickness threshold; the 1 % volume front does not jump when a thin tip detaches)
+MAIN_MEASURES = ("2d", "v99")
+
+REFERENCE_COLUMNS = ("case", "a", "theta_deg", "final_runout_norm", "flow_time", "flow_time_norm",
+                     "front_definition", "provenance", "note", "dx", "time_to_rest",
+                     *[f"final_runout_norm_{m}" for m in MEASURES], "flow_time_v99", "path")
+#: default flow-time tolerance (m), the shared definition's default (docs/paper-notes.md)
+FLOW_TIME_TOL = 1e-3
+
+
+def _as_dataset(run) -> tuple[xr.Dataset, str]:
+    if isinstance(run, xr.Dataset):
+        return run, str(run.attrs.get("source_file", run.attrs.get("case", "dataset")))
+    path = Path(run)
+    if not path.exists():
+        raise ConfigError(f"input: file {str(path)!r} does not exist")
+    ds = open_dataset(path)
+    ds.attrs.setdefault("source_file", path.name)
+    return ds, path.name
+
+
+def _attr(ds: xr.Dataset, name: str, where: str) -> float:
+    if name not in ds.attrs:
+        raise ConfigError(f"{where}: global attribute {name!r} missing (data contract)")
+    return float(ds.attrs[name])
+
+
+def front_definition(threshold: float | None, tol: float | None = None) -> str:
+    """Human-readable front (and flow-time) definition, printed beside every runout."""
+    if threshold is None or not math.isfinite(float(threshold)):
+        text = "front definition not recorded"
+    else:
+        text = f"front: depth ≥ {1e3 * float(threshold):.2f} mm, contiguous from the main mass"
+    if tol is not None:
+        text += f"; flow time: front moves < {1e3 * tol:.1f} mm afterwards"
+    return text
+
+
+def match_table5(a: float, theta_deg: float, rel_tol: float = 0.02, theta_tol: float = 0.05) -> str | None:
+    """The Table 5 case name whose (a, θ) matches, or None.
+
+    Table 5 rounds H0 (0.113 m for a = 0.45, whose L0 = 0.25 m gives 0.452): ``rel_tol`` on a
+    absorbs the rounding while keeping the four cases (a = 0.3, 0.45, 0.7, 1.24) well apart.
+    """
+    t5 = cases.table5()
+    ok = (np.abs(t5.theta_deg - theta_deg) <= theta_tol) & (np.abs(t5.a - a) <= rel_tol * t5.a)
+    if not ok.any():
+        return None
+    return str(t5.case_id[ok].iloc[0])
+
+
+def reference_row(run, tol: float = FLOW_TIME_TOL) -> dict:
+    """One reference-table row from a 2D ISPH run (Dataset or path)."""
+    ds, name = _as_dataset(run)
+    where = f"reference {name}"
+    L0, H0, theta = _attr(ds, "L0", where), _attr(ds, "H0", where), _attr(ds, "theta_deg", where)
+    if "front_position" not in ds:
+        raise ConfigError(f"{where}: variable 'front_position' missing (data contract)")
+    time = np.asarray(ds["time"].values, dtype=float)
+    front = np.asarray(ds["front_position"].values, dtype=float)
+    if "final_front_position" in ds:
+        x_final = float(ds["final_front_position"].values)
+    else:
+        x_final = float(front[np.isfinite(front)][-1])
+    status = str(ds.attrs.get("status", "ok"))
+    if status.lower().startswith("failed"):
+        raise ConfigError(f"{where}: the 2D run did not finish ({status}); a failed run is not a reference")
+    a = H0 / L0
+    run_case = str(ds.attrs.get("case", Path(name).stem))
+    case = match_table5(a, theta)
+    if case is None:  # not a Table 5 geometry: keep the run's own name (a user's case)
+        case = run_case
+    tf = _flow_time(time, front, tol)
+    tc = cases.characteristic_time(H0, math.radians(theta))
+    # at rest: the run's own verdict when it gives one, else the front stopped before the last output
+    if "time_to_rest" in ds:
+        at_rest = bool(np.isfinite(float(ds["time_to_rest"].values)))
+    else:
+        at_rest = bool(np.isfinite(tf) and tf < time[-1])
+    if not at_rest:
+        LOG.warning("%s: the 2D run is not at rest at t_end = %.3g s: its runout and flow time are lower "
+                    "bounds (note column)", where, time[-1])
+    dx = ds.attrs.get("dx")
+    dx_text = f", dx={float(dx):g} m" if dx is not None else ""
+    robust = _robust_fronts(ds, time, L0, tol)
+    return {**robust, "dx": float(dx) if dx is not None else float("nan"),
+            "path": "" if isinstance(run, xr.Dataset) else str(run),
+            "time_to_rest": float(ds["time_to_rest"].values) if "time_to_rest" in ds else float("nan"),
+        "case": case, "a": a, "theta_deg": theta,
+        "final_runout_norm": (x_final - L0) / L0,
+        "flow_time": tf, "flow_time_norm": tf / tc,
+        "front_definition": front_definition(ds.attrs.get("front_depth_threshold"), tol),
+        "provenance": f"granudep 2D ISPH{dx_text} ({run_case}, file {name})",
+        "note": "" if at_rest else f"not at rest at t_end = {time[-1]:.3g} s: lower bounds",
+    }
+
+
+def _robust_fronts(ds: xr.Dataset, time: np.ndarray, L0: float, tol: float) -> dict:
+    """final_runout_norm_{2d,5mm,v99,tail} and the flow time of the 1 % volume front, from the
+    ``final_front_*`` / ``front_*`` variables of a 2D or DA file (NaN where the file predates them)."""
+    out = {}
+    for m in MEASURES:
+        name = f"final_front_{m}"
+        x = float(ds[name].values) if name in ds else float("nan")
+        out[f"final_runout_norm_{m}"] = (x - L0) / L0
+    out["flow_time_v99"] = _flow_time(time, np.asarray(ds["front_v99"].values, float), tol) \
+        if "front_v99" in ds else float("nan")
+    return out
+
+
+def _dx_label(dxs) -> str:
+    vals = sorted({round(1e3 * float(d), 6) for d in dxs if d is not None and math.isfinite(float(d))})
+    return "dx not recorded" if not vals else "dx = " + " / ".join(f"{v:g}" for v in vals) + " mm"
+
+
+def reference_from_isph(runs: Iterable, tol: float = FLOW_TIME_TOL, label: str | None = None) -> pd.DataFrame:
+    """Reference table (:data:`REFERENCE_COLUMNS`) from 2D ISPH runs.
+
+    ``label`` names the reference source (e.g. "2D paper resolution"); the table's ``reference``
+    column is then the label with the runs' dx ("2D paper resolution (dx = 4 mm)"), so every number
+    read against it is labelled with its resolution.
+    """
+    rows = [reference_row(r, tol) for r in runs]
+    if not rows:
+        raise ConfigError("reference: no ISPH run given")
+    table = pd.DataFrame(rows, columns=list(REFERENCE_COLUMNS))
+    if label:
+        table["reference"] = f"{label} ({_dx_label(table['dx'])})"
+    return table
+
+
+def select_reference_runs(runs: Iterable, dx: float | None = None) -> list:
+    """Per Table 5 case (matched by (a, θ)), the run at resolution ``dx`` (m), or the finest one.
+
+    The converged reference of the comparison (issue 13): until the convergence ladder names the
+    converged dx, it is the finest-resolution run available for each case. A case with no run at the
+    requested ``dx`` keeps its finest run, with a warning. Returns the selected paths/datasets.
+    """
+    by_case: dict[str, list] = {}
+    for r in runs:
+        ds, name = _as_dataset(r)
+        if str(ds.attrs.get("status", "ok")).lower().startswith("failed"):
+            LOG.warning("reference %s: failed run skipped", name)
+            continue
+        a = float(ds.attrs["H0"]) / float(ds.attrs["L0"])
+        case = match_table5(a, float(ds.attrs["theta_deg"])) or str(ds.attrs.get("case", name))
+        by_case.setdefault(case, []).append((float(ds.attrs.get("dx", math.nan)), r))
+    chosen = []
+    for case, items in sorted(by_case.items()):
+        items = sorted(items, key=lambda t: (not math.isfinite(t[0]), t[0]))
+        pick = items[0]
+        if dx is not None:
+            hit = [t for t in items if math.isfinite(t[0]) and math.isclose(t[0], dx, rel_tol=1e-6)]
+            if hit:
+                pick = hit[0]
+            else:
+                LOG.warning("reference %s: no run at dx = %g m; the finest (dx = %g m) is used", case, dx, pick[0])
+        chosen.append(pick[1])
+    if not chosen:
+        raise ConfigError("reference: no usable ISPH run given")
+    return chosen
+
+
+def load_reference(table, name: str | None = None) -> pd.DataFrame:
+    """Read and check a reference table (path or DataFrame).
+
+    Required: ``case``, ``final_runout_norm``, ``flow_time`` or ``flow_time_norm``, ``provenance``.
+    """
+    if isinstance(table, pd.DataFrame):
+        df, name = table.copy(), name or "reference table"
+    else:
+        path = Path(table)
+        name = name or str(path)
+        if not path.exists():
+            raise ConfigError(f"--reference: file {name!r} does not exist")
+        df = pd.read_csv(path)
+    missing = [c for c in ("case", "final_runout_norm", "provenance") if c not in df.columns]
+    if "flow_time" not in df.columns and "flow_time_norm" not in df.columns:
+        missing.append("flow_time (or flow_time_norm)")
+    if missing:
+        raise ConfigError(f"--reference {name}: missing column(s) {', '.join(missing)} "
+                          f"(required: case, final_runout_norm, flow_time or flow_time_norm, provenance)")
+    if df["provenance"].isna().any() or (df["provenance"].astype(str).str.strip() == "").any():
+        raise ConfigError(f"--reference {name}: every row needs a non-empty 'provenance'")
+    if "reference" not in df.columns:
+        df["reference"] = [source_label(p) for p in df["provenance"]]
+    df["note"] = df["note"].astype(object).where(df["note"].notna(), "").astype(str) if "note" in df.columns else ""
+    for col in ("flow_time", "flow_time_norm", "front_definition"):
+        if col not in df.columns:
+            df[col] = np.nan if col != "front_definition" else "not stated"
+    df["case"] = df["case"].astype(str)
+    return df
+
+
+def source_label(provenance: str) -> str:
+    """The reference *source* of a provenance string (rows of one source are grouped together).
+
+    ``granudep reference`` writes "granudep 2D ISPH, dx=0.008 m (T22-A70, file T22-A70.nc)": the
+    per-run part in parentheses is dropped so the four Table 5 runs form one source. Any other
+    provenance (e.g. a user's measurements) is its own source unless the table has a
+    ``reference`` column.
+    """
+    m = re.match(r"^(granudep 2D ISPH[^()]*?)\s*\(.*\)$", str(provenance))
+    return m.group(1) if m else str(provenance)
+
+
+def _rel(value: float, ref: float) -> float:
+    if not (math.isfinite(value) and math.isfinite(ref)) or ref == 0.0:
+        return float("nan")
+    return (value - ref) / ref
+
+
+def da_summary(run) -> dict:
+    """The scalars of a DA run used in the comparison."""
+    ds, name = _as_dataset(run)
+    where = f"DA run {name}"
+    if "case" not in ds.attrs:
+        raise ConfigError(f"{where}: global attribute 'case' missing (data contract)")
+    dep = int(_attr(ds, "deposition", where))
+    out = {"case": str(ds.attrs["case"]), "deposition": dep,
+           "variant": "deposition" if dep else "no deposition", "da_file": name}
+    for key in ("final_runout_norm", "flow_time", "flow_time_norm"):
+        if key not in ds:
+            raise ConfigError(f"{where}: variable {key!r} missing (data contract)")
+        out[key] = float(ds[key].values)
+    out["a"] = float(ds.attrs["H0"]) / float(ds.attrs["L0"]) if {"H0", "L0"} <= set(ds.attrs) else float("nan")
+    out["da_front_definition"] = front_definition(ds.attrs.get("front_depth_threshold"))
+    out["reading"] = da_reading(ds)
+    out["A"] = float(ds.attrs.get("A", math.nan)) if dep else float("nan")
+    out["B"] = float(ds.attrs.get("B", math.nan)) if dep else float("nan")
+    out["x_inf_warning"] = str(ds.attrs.get("x_inf_warning", "")) if dep else ""
+    time = np.asarray(ds["time"].values, dtype=float)
+    L0 = float(ds.attrs.get("L0", math.nan))
+    tol = float(ds.attrs.get("flow_time_tolerance", FLOW_TIME_TOL))
+    out.update(_robust_fronts(ds, time, L0, tol))
+    return out
+
+
+#: the A, B readings of the reading matrix (issue 13), by name
+READINGS = {"computed": "computed A, B (normalised)", "paper": "paper A, B normalised",
+            "paper-dimensional": "paper A, B dimensional", "computed-dimensional": "computed A, B dimensional",
+            "none": "no deposition"}
+
+
+def da_reading(ds: xr.Dataset) -> str:
+    """Which A, B reading a DA run used: a :data:`READINGS` key ("none" without deposition)."""
+    if not int(ds.attrs.get("deposition", 0)):
+        return "none"
+    src = str(ds.attrs.get("ab_source", "")).split(" ", 1)[0].strip().lower() or "unknown"
+    units = str(ds.attrs.get("coefficient_units", "normalised"))
+    return src if units == "normalised" else f"{src}-dimensional"
+
+
+COMPARE_COLUMNS = ("case", "a", "variant", "deposition", "reading", "A", "B", "reference", "provenance",
+                   "reference_dx", "final_runout_norm",
+                   "reference_final_runout_norm", "runout_rel_error", "flow_time", "reference_flow_time",
+                   "flow_time_norm", "reference_flow_time_norm", "flow_time_rel_error", "flow_time_basis",
+                   *[c for m in MEASURES for c in (f"final_runout_norm_{m}", f"reference_final_runout_norm_{m}",
+                                                   f"runout_rel_error_{m}")],
+                   "flow_time_v99", "reference_flow_time_v99", "flow_time_v99_rel_error",
+                   "da_front_definition", "reference_front_definition", "reference_note", "x_inf_warning", "da_file")
+
+
+def compare(da_runs: Iterable, references: Iterable) -> pd.DataFrame:
+    """Relative errors of every DA run against every reference row of the same case.
+
+    Flow time is compared in seconds when the reference gives ``flow_time``, otherwise as
+    t_F/t_c (``flow_time_basis`` says which). DA runs without any reference row are listed with
+    NaN errors and ``provenance`` "no reference" so they are not silently dropped.
+    """
+    refs = [load_reference(r) for r in references]
+    if not refs:
+        raise ConfigError("--reference: at least one reference table is required")
+    ref = pd.concat(refs, ignore_index=True)
+    rows = []
+    for run in da_runs:
+        d = da_summary(run)
+        match = ref[ref["case"] == d["case"]]
+        if match.empty:
+            rows.append({**d, "reference": "no reference", "provenance": "no reference", "reference_dx": np.nan,
+                         "reference_final_runout_norm": np.nan,
+                         "runout_rel_error": np.nan, "reference_flow_time": np.nan,
+                         "reference_flow_time_norm": np.nan, "flow_time_rel_error": np.nan,
+                         "flow_time_basis": "", "reference_front_definition": "", "reference_note": ""})
+            continue
+        for _, r in match.iterrows():
+            rft, rftn = float(r["flow_time"]), float(r["flow_time_norm"])
+            if math.isfinite(rft):
+                basis, err = "s", _rel(d["flow_time"], rft)
+            else:
+                basis, err = "t/t_c", _rel(d["flow_time_norm"], rftn)
+            robust = {}
+            for m in MEASURES:
+                rv = float(r.get(f"final_runout_norm_{m}", np.nan))
+                robust[f"reference_final_runout_norm_{m}"] = rv
+                robust[f"runout_rel_error_{m}"] = _rel(d[f"final_runout_norm_{m}"], rv)
+            rv99 = float(r.get("flow_time_v99", np.nan))
+            robust["reference_flow_time_v99"] = rv99
+            robust["flow_time_v99_rel_error"] = _rel(d["flow_time_v99"], rv99)
+            rows.append({**d, **robust, "reference": str(r["reference"]), "provenance": str(r["provenance"]),
+                         "reference_dx": float(r.get("dx", np.nan)),
+                         "reference_final_runout_norm": float(r["final_runout_norm"]),
+                         "runout_rel_error": _rel(d["final_runout_norm"], float(r["final_runout_norm"])),
+                         "reference_flow_time": rft, "reference_flow_time_norm": rftn,
+                         "flow_time_rel_error": err, "flow_time_basis": basis,
+                         "reference_front_definition": str(r["front_definition"]),
+                         "reference_note": str(r["note"])})
+    if not rows:
+        raise ConfigError("compare: no DA run given")
+    out = pd.DataFrame(rows)
+    for c in COMPARE_COLUMNS:
+        if c not in out.columns:
+            out[c] = np.nan
+    return out[list(COMPARE_COLUMNS)].sort_values(["case", "reference", "deposition", "reading"], kind="stable",
+                                                  ignore_index=True)
+
+
+def improvement(table: pd.DataFrame) -> pd.DataFrame:
+    """Case by case (and per reference): does deposition bring the DA prediction closer?
+
+    Columns: case, reference, runout_error_nodep, runout_error_dep, runout_improved,
+    flow_time_error_nodep, flow_time_error_dep, flow_time_improved (improved = |error| smaller
+    with deposition; NaN where either variant is missing).
+    """
+    rows = []
+    t = table[table["reference"] != "no reference"]
+    for (case, prov), g in t.groupby(["case", "reference"], sort=True):
+        row = {"case": case, "reference": prov}
+        for q, col in (("runout", "runout_rel_error"), ("flow_time", "flow_time_rel_error")):
+            nd = g.loc[g["deposition"] == 0, col]
+            de = g.loc[g["deposition"] == 1, col]
+            e_nd = float(nd.iloc[0]) if len(nd) else float("nan")
+            e_de = float(de.iloc[0]) if len(de) else float("nan")
+            row[f"{q}_error_nodep"] = e_nd
+            row[f"{q}_error_dep"] = e_de
+            row[f"{q}_improved"] = (abs(e_de) < abs(e_nd)) if math.isfinite(e_nd) and math.isfinite(e_de) else None
+        rows.append(row)
+    return pd.DataFrame(rows, columns=["case", "reference", "runout_error_nodep", "runout_error_dep",
+                                       "runout_improved", "flow_time_error_nodep", "flow_time_error_dep",
+                                       "flow_time_improved"])
+
+
+def max_errors(table: pd.DataFrame) -> pd.DataFrame:
+    """Largest |relative error| per (reference, variant, quantity) next to the paper's stated one."""
+    rows = []
+    t = table[table["reference"] != "no reference"]
+    for (prov, variant), g in t.groupby(["reference", "variant"], sort=True):
+        for q, col in (("runout", "runout_rel_error"), ("flow_time", "flow_time_rel_error")):
+            e = g[col].astype(float)
+            if not np.isfinite(e).any():
+                continue
+            i = e.abs().idxmax()
+            paper = PAPER_MAX_ERRORS.get(variant, {})
+            rows.append({"reference": prov, "variant": variant, "quantity": q,
+                         "max_abs_rel_error": abs(float(e[i])), "signed_error": float(e[i]),
+                         "case": g.loc[i, "case"], "a": float(g.loc[i, "a"]),
+                         "paper_max_error": paper.get(q, np.nan), "paper_case_a": paper.get(f"{q}_a", np.nan)})
+    return pd.DataFrame(rows, columns=["reference", "variant", "quantity", "max_abs_rel_error",
+                                       "signed_error", "case", "a", "paper_max_error", "paper_case_a"])
+
+
+MATRIX_COLUMNS = ["case", "a", "reference", "reference_dx", "reading", "reading_label", "A", "B", "measure",
+                  "final_runout_norm", "final_runout_norm_nodep", "reference_final_runout_norm",
+                  "runout_error", "runout_error_nodep", "runout_improved",
+                  "flow_time", "flow_time_nodep", "reference_flow_time",
+                  "flow_time_error", "flow_time_error_nodep", "flow_time_improved", "x_inf_warning"]
+
+
+def reading_matrix(table: pd.DataFrame, measures: Iterable[str] = MAIN_MEASURES) -> pd.DataFrame:
+    """The reading matrix of issue 13: per (case, reference, A/B reading, front measure), the runout and
+    flow-time errors with deposition beside those without (the no-deposition run is shared by every
+    reading) and whether deposition improved them (smaller |error|).
+
+    ``measure`` "2d" is the default front (2 grain diameters, the ``final_runout_norm`` and
+    ``flow_time`` of the files); "v99" the 1 % volume front and its flow time. Rows only for the
+    readings present in ``table`` (a run per reading), never filled in.
+    """
+    t = table[table["reference"] != "no reference"]
+    rows = []
+    for (case, ref), g in t.groupby(["case", "reference"], sort=True):
+        nd = g[g["deposition"] == 0]
+        for reading, gr in g[g["deposition"] == 1].groupby("reading", sort=True):
+            r = gr.iloc[0]
+            n = nd.iloc[0] if len(nd) else None
+            for m in measures:
+                if m == "2d":
+                    cols = ("final_runout_norm", "reference_final_runout_norm", "runout_rel_error",
+                            "flow_time", "reference_flow_time", "flow_time_rel_error")
+                else:
+                    cols = (f"final_runout_norm_{m}", f"reference_final_runout_norm_{m}", f"runout_rel_error_{m}",
+                            f"flow_time_{m}", f"reference_flow_time_{m}", f"flow_time_{m}_rel_error")
+                fr, rfr, er, ft, rft, ef = cols
+
+                def get(row, c):
+                    return float(row[c]) if row is not None and c in row.index else float("nan")
+                row = {"case": case, "a": float(r["a"]), "reference": ref, "reference_dx": get(r, "reference_dx"),
+                       "reading": reading, "reading_label": READINGS.get(reading, reading),
+                       "A": get(r, "A"), "B": get(r, "B"), "measure": m,
+                       "final_runout_norm": get(r, fr), "final_runout_norm_nodep": get(n, fr),
+                       "reference_final_runout_norm": get(r, rfr),
+                       "runout_error": get(r, er), "runout_error_nodep": get(n, er),
+                       "flow_time": get(r, ft), "flow_time_nodep": get(n, ft), "reference_flow_time": get(r, rft),
+                       "flow_time_error": get(r, ef), "flow_time_error_nodep": get(n, ef),
+                       "x_inf_warning": str(r.get("x_inf_warning", "") or "")}
+                for q in ("runout", "flow_time"):
+                    e_d, e_n = row[f"{q}_error"], row[f"{q}_error_nodep"]
+                    row[f"{q}_improved"] = (abs(e_d) < abs(e_n)) if math.isfinite(e_d) and math.isfinite(e_n) else None
+                rows.append(row)
+    return pd.DataFrame(rows, columns=MATRIX_COLUMNS)
+
+
+def matrix_maxima(matrix: pd.DataFrame) -> pd.DataFrame:
+    """Per (reference, reading, measure): the largest |error| over the cases with and without
+    deposition, and the reduction (no deposition − deposition, in error units) — the paper's
+    "improves by up to 38 %" is 55 % − 17 % (runout) = 107 % − 69 % (flow time) = 38 points."""
+    rows = []
+    for (ref, reading, m), g in matrix.groupby(["reference", "reading", "measure"], sort=True):
+        row = {"reference": ref, "reading": reading, "reading_label": READINGS.get(reading, reading), "measure": m,
+               "n_cases": int(len(g))}
+        for q in ("runout", "flow_time"):
+            for kind, col in (("dep", f"{q}_error"), ("nodep", f"{q}_error_nodep")):
+                e = g[col].astype(float).abs()
+                ok = np.isfinite(e)
+                row[f"max_{q}_error_{kind}"] = float(e[ok].max()) if ok.any() else float("nan")
+                row[f"max_{q}_case_{kind}"] = str(g.loc[e[ok].idxmax(), "case"]) if ok.any() else ""
+            row[f"{q}_max_reduction"] = row[f"max_{q}_error_nodep"] - row[f"max_{q}_error_dep"]
+            imp = g[f"{q}_improved"].dropna()
+            row[f"{q}_improved_cases"] = f"{int(imp.astype(bool).sum())}/{len(imp)}"
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _pct(x) -> str:
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return "n/a"
+    return "n/a" if not math.isfinite(x) else f"{100 * x:+.1f} %"
+
+
+def _yes_no(v) -> str:
+    return "n/a" if v is None or (isinstance(v, float) and math.isnan(v)) else ("yes" if bool(v) else "no")
+
+
+def report_text(table: pd.DataFrame) -> str:
+    """Plain-text report: the table, the case-by-case verdict and the maxima vs the paper's."""
+    lines = ["DA runs vs reference (relative error = (computed − reference)/reference)", ""]
+    show = table[["case", "variant", "reference", "final_runout_norm", "reference_final_runout_norm",
+                  "runout_rel_error", "flow_time", "reference_flow_time", "flow_time_rel_error"]].copy()
+    show["runout_rel_error"] = show["runout_rel_error"].map(_pct)
+    show["flow_time_rel_error"] = show["flow_time_rel_error"].map(_pct)
+    with pd.option_context("display.width", 200, "display.max_colwidth", 60, "display.max_rows", 500):
+        lines.append(show.to_string(index=False, float_format=lambda v: f"{v:.3f}"))
+    defs = sorted(set(table["da_front_definition"]) | set(d for d in table["reference_front_definition"] if d))
+    lines += ["", "Front definitions: " + " | ".join(defs), "", "Does deposition improve the prediction?"]
+    imp = improvement(table)
+    if imp.empty:
+        lines.append("  not available (no case has a reference)")
+    for _, r in imp.iterrows():
+        lines.append(f"  {r['case']} vs {r['reference']}: runout {_pct(r['runout_error_nodep'])} → "
+                     f"{_pct(r['runout_error_dep'])} (improved: {_yes_no(r['runout_improved'])}); flow time "
+                     f"{_pct(r['flow_time_error_nodep'])} → {_pct(r['flow_time_error_dep'])} "
+                     f"(improved: {_yes_no(r['flow_time_improved'])})")
+    lines += ["", "Maximum |error| (ours) vs the paper's stated maximum (vs Farin et al. 2014):"]
+    mx = max_errors(table)
+    if mx.empty:
+        lines.append("  not available")
+    for _, r in mx.iterrows():
+        lines.append(f"  {r['variant']}, {r['quantity']}: ours {100 * r['max_abs_rel_error']:.1f} % "
+                     f"({r['case']}, vs {r['reference']}); paper {100 * r['paper_max_error']:.0f} % "
+                     f"(a = {r['paper_case_a']:g})")
+    return "\n".join(lines)

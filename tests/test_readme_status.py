@@ -1,0 +1,86 @@
+"""`granudep readme-status`: the README's status block generated from results/ files, idempotently."""
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+
+from granudep.cli import main
+from granudep.readme_status import BEGIN, END, status_block, update_readme
+
+README = f"# x\n\nHand-written text (t_s = 14.6, keep).\n\n{BEGIN}\nold numbers\n{END}\n\n## After\n\nmore text\n"
+
+
+@pytest.fixture()
+def results(tmp_path):
+    r = tmp_path / "results"
+    (r / "verification").mkdir(parents=True)
+    (r / "regression").mkdir()
+    (r / "compare").mkdir()
+    pd.DataFrame({"check": ["a", "a", "b"], "quantity": ["q1", "q2", "q3"], "passed": [True, True, True]}
+                 ).to_csv(r / "verification/da.csv", index=False)
+    pd.DataFrame({"check": ["h", "dam_break"], "quantity": ["q", "E"], "passed": [True, False]}
+                 ).to_csv(r / "verification/isph.csv", index=False)
+    pd.DataFrame({"claim_id": ["failure_plane_angle", "rest_time_T22-A70", "x"], "case": ["T22-A70"] * 3,
+                  "paper_value": [55.8, 13.5, 1.0], "ours_paper_res": [61.23, 14.44, 1.0],
+                  "verdict": ["not reproduced", "reproduced", "reproduced"]}).to_csv(r / "claims.csv", index=False)
+    pd.DataFrame({"rel_diff_pct": [10.0, -30.0], "rel_diff_fit_pct": [5.0, 15.0]}
+                 ).to_csv(r / "regression/table3_comparison.csv", index=False)
+    pd.DataFrame({"a": [0.7, 0.3], "A_rel_diff_pct": [-424.0, 53.5], "B_rel_diff_pct": [186.0, -49.3],
+                  "r2": [0.29, 0.65]}).to_csv(r / "regression/table5_comparison.csv", index=False)
+    pd.DataFrame({"case": ["1D-A70", "1D-A70"], "deposition": [0, 1], "reference": ["2D run"] * 2,
+                  "runout_rel_error": [0.92, 0.90], "final_runout_norm": [13.0, 12.35]}
+                 ).to_csv(r / "compare/comparison.csv", index=False)
+    return r
+
+
+def test_block_reads_the_numbers_from_the_files(results):
+    block = status_block(results)
+    assert block.startswith(BEGIN) and block.endswith(END)
+    assert "DA 3 of 3 rows" in block and "2D ISPH 1 of 2 rows" in block and "`dam_break`" in block
+    assert "61.2° from the horizontal (paper 55.8°" in block
+    assert "T22-A70 14.4 (paper ≈ 13.5)" in block
+    assert "2 reproduced, 1 not reproduced, 0 not checkable of 3 claims" in block
+    assert "mean |difference| 20.0 % (onset) and 10.0 % (fit intercept) over 2" in block
+    assert block.index("a = 0.3: A +54 %") < block.index("a = 0.7: A -424 %")  # sorted by a
+    assert "shortens the DA runout by 5 %" in block and "92 % without deposition, 90 % with it" in block
+    # a changed output changes the block
+    pd.DataFrame({"rel_diff_pct": [50.0], "rel_diff_fit_pct": [5.0]}).to_csv(
+        results / "regression/table3_comparison.csv", index=False)
+    assert "mean |difference| 50.0 % (onset)" in status_block(results)
+
+
+def test_missing_output_is_named_not_guessed(results):
+    (results / "claims.csv").unlink()
+    block = status_block(results)
+    assert "`results/claims.csv` missing" in block and "Failure plane" not in block
+
+
+def test_command_is_idempotent_and_leaves_the_rest_alone(results, tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text(README, encoding="utf-8")
+    assert main(["readme-status", str(readme), "--results", str(results), "--check"]) == 1  # stale
+    assert readme.read_text(encoding="utf-8") == README  # --check writes nothing
+    assert main(["readme-status", str(readme), "--results", str(results)]) == 0
+    once = readme.read_text(encoding="utf-8")
+    assert main(["readme-status", str(readme), "--results", str(results)]) == 0
+    assert readme.read_text(encoding="utf-8") == once
+    assert main(["readme-status", str(readme), "--results", str(results), "--check"]) == 0
+    assert "old numbers" not in once and "61.2°" in once
+    head, tail = README.split(BEGIN)[0], README.split(END)[1]
+    assert once.startswith(head) and once.endswith(tail)
+
+
+def test_readme_without_markers_is_refused(tmp_path, results, capsys):
+    readme = tmp_path / "README.md"
+    readme.write_text("# no block\n", encoding="utf-8")
+    assert main(["readme-status", str(readme), "--results", str(results)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "marker pair" in err[0]
+    with pytest.raises(Exception):
+        update_readme(README + BEGIN, "x")
+
+
+def test_project_readme_has_one_block():
+    from pathlib import Path
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    assert text.count(BEGIN) == 1 and text.count(END) == 1
