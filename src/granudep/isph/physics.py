@@ -32,14 +32,6 @@ SLIP_CODES = {"no_slip": SLIP_NO, "navier": SLIP_NAVIER, "free_slip": SLIP_FREE,
 
 
 @njit(cache=True, inline="always")
-def _gw(r, h):
-    """(dW/dr)/r, so that ∇_i W_ij = _gw * r_ij (finite at r -> 0)."""
-    if r < 1e-12 * h:
-        return 0.0
-    return wendland_dwdr(r, h) / r
-
-
-@njit(cache=True, inline="always")
 def wall_beta_linear(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
     """β of the linear extrapolation u_w = u_i (b − d_w)/(d_i + b) (no cap; d_i floored at dx/4):
     u_i − u_w = β u_i for the tangential component (velocity gradient of the rheology)."""
@@ -60,9 +52,9 @@ def wall_beta(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
 
 @njit(cache=True, parallel=PARALLEL)
 def pair_kernel(rr, h):
-    """W(r_ij) and (dW/dr)/r (:func:`_gw`) of every pair of the neighbour list, once per step for
+    """W(r_ij) and (dW/dr)/r (0 at r < 1e-12 h) of every pair of the neighbour list, once per step for
     all the kernels below (each evaluated them again: 0.13 ms per kernel and step at 75k pairs).
-    The same expressions in the same order as :func:`wendland_w` and :func:`_gw`: bit for bit."""
+    The same expressions in the same order as :func:`wendland_w` and :func:`wendland_dwdr`: bit for bit."""
     n = rr.size
     w = np.empty(n)
     gw = np.empty(n)
@@ -243,7 +235,8 @@ def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
 def assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, p, eta, gdot, wnx, wny, wc,
                      slip, slip_length, mu_wall, dx, dt, rho, eps2, mean, gx, gy, eta_max, lap_norm, wall_ns,
                      wall_k):
-    """Implicit viscous matrices A = I − Δt/ρ ∇·(η∇·) (Morris Laplacian, harmonic-mean η) as CSR.
+    """Implicit viscous matrices A = I − Δt/ρ ∇·(η∇·) (Morris Laplacian, pair viscosity
+    :func:`pair_viscosity`, ``rheology.pair_mean``: stress-weighted by default) as CSR.
 
     Row i: (1 + Δt/ρ Σ_j c_ij + wall_i) u_i − Δt/ρ Σ_j c_ij u_j,
     c_ij = 2 η̄_ij V F_ij, F_ij = −r dW/dr/(r² + ε²) ≥ 0, η̄ = 2 η_i η_j/(η_i + η_j). Symmetric.
@@ -599,25 +592,6 @@ def pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, p, us, vs, lmat, w
         gpx[i] = lmat[i, 0] * ax + lmat[i, 1] * ay
         gpy[i] = lmat[i, 2] * ax + lmat[i, 3] * ay
     return gpx, gpy
-
-
-@njit(cache=True)
-def wall_pressure_at_base(start, nbr, rx, ry, rr, nf, p, us, vs, wnx, wny, dt, rho):
-    """Mean mirror pressure of the wall particles seen by each fluid particle (diagnostic)."""
-    out = np.full(nf, np.nan)
-    for i in range(nf):
-        s = 0.0
-        c = 0
-        for k in range(start[i], start[i + 1]):
-            j = nbr[k]
-            if j >= nf:
-                w = j - nf
-                gn = rho / dt * min(us[i] * wnx[w] + vs[i] * wny[w], 0.0)
-                s += p[i] - gn * (wnx[w] * rx[k] + wny[w] * ry[k])
-                c += 1
-        if c > 0:
-            out[i] = s / c
-    return out
 
 
 @njit(cache=True, parallel=PARALLEL)
