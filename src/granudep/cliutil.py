@@ -50,3 +50,40 @@ def interrupted_path(out) -> "os.PathLike":
     from pathlib import Path
     out = Path(out)
     return out.with_name(out.stem + ".interrupted.nc")
+
+
+def add_checkpoint_args(p) -> None:
+    """``--checkpoint FILE``, ``--checkpoint-every S``, ``--restart CHECKPOINT|auto`` (the DA and ISPH runs)."""
+    p.add_argument("--checkpoint", metavar="FILE", help="checkpoint file (default OUT folder/.{OUT stem}.ckpt)")
+    p.add_argument("--checkpoint-every", type=float, default=600.0, metavar="S",
+                   help="wall seconds between checkpoints (default 600; SIGTERM/SIGINT always write one)")
+    p.add_argument("--restart", metavar="CHECKPOINT|auto",
+                   help="continue an interrupted run from its checkpoint (bit-identical); 'auto': the default "
+                        "checkpoint if it exists and matches the inputs")
+
+
+def checkpoint_path(args, out) -> "os.PathLike":
+    """--checkpoint, or the default next to the output: OUT folder/.{OUT stem}.ckpt."""
+    from pathlib import Path
+    out = Path(out)
+    return Path(args.checkpoint) if args.checkpoint else out.with_name(f".{out.stem}.ckpt")
+
+
+def restart_file(args, ckpt, check) -> "os.PathLike | None":
+    """--restart FILE, or --restart auto: the default checkpoint when it exists and ``check(ckpt)``
+    (which raises ConfigError for a checkpoint of another run) accepts it."""
+    from pathlib import Path
+    from .progress import LOG
+    if args.restart is None:
+        return None
+    if args.restart != "auto":
+        return Path(args.restart)
+    ckpt = Path(ckpt)
+    if not ckpt.is_file():
+        return None
+    try:
+        check(ckpt)
+    except ConfigError as exc:
+        LOG.warning("not restarting: %s; starting afresh", exc)
+        return None
+    return ckpt

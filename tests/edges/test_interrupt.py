@@ -188,6 +188,7 @@ def test_isph_cli_sigterm_one_line_and_partial_output(tmp_path):
     lines += proc.stderr.read().splitlines(True)
     assert proc.wait() == 128 + signal.SIGTERM
     errors = [ln for ln in lines if " ERROR " in ln or "Traceback" in ln]
-    assert len(errors) == 1 and "stopped by SIGTERM" in errors[0], errors
+    assert len(errors) == 1 and "stopped by SIGTERM" in errors[0] and "--restart" in errors[0], errors
     assert not out.exists() and not list(tmp_path.glob(".*.tmp"))
     assert granudep.load(tmp_path / "T22-A70.interrupted.nc").attrs["status"].startswith("interrupted")
+    assert (tmp_path / ".T22-A70.ckpt").is_file()  # what --restart auto continues (tests/isph/test_checkpoint.py)

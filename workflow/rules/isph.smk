@@ -1,5 +1,7 @@
 # 2D ISPH with the mu(I) rheology (Sections 2.1-2.2): every Table 1 case, the Table 5 geometries
 # at 22 deg, and any user case. Output: results/isph/{case}.nc (particles x time).
+# A run cancelled by SIGTERM (Snakemake, SLURM) writes a checkpoint next to its output
+# (.{case}.ckpt); the rerun continues from it (--restart auto), bit-identically.
 
 
 rule user_case_config:
@@ -44,4 +46,4 @@ rule isph_run:
         mem_mb=4000,
     shell:
         "NUMBA_NUM_THREADS={threads} granudep isph {params.source} --dx {params.dx} {params.t_end}"
-        " -o {output} > {log} 2>&1"
+        " --restart auto -o {output} > {log} 2>&1"

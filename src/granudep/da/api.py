@@ -5,6 +5,7 @@ import math
 
 import xarray as xr
 
+from ..checkpoint import identity as checkpoint_identity
 from ..progress import LOG, make_progress
 from .checkpoint import Checkpointer, DAInterrupted
 from .config import DAConfig, resolve
@@ -83,13 +84,6 @@ def run_da(case_or_config, deposition: bool | dict = True, progress=None, checkp
         progress.close()
     ckpt.remove()
     return ds
-
-
-def checkpoint_identity(cfg: DAConfig) -> str:
-    """What a checkpoint must match to be continued: the resolved config and the version."""
-    from .._version import __version__
-    from ..config import to_yaml
-    return f"granudep {__version__}\n{to_yaml(cfg)}"
 
 
 def _run(cfg, deposition, ka, kp, label, progress, simulate) -> xr.Dataset:

@@ -3,7 +3,7 @@
 A DA run with deposition is several simulations (the no-deposition run for x∞, then one per x∞
 iterate). :class:`Checkpointer` keeps every finished simulation's record and the state of the
 running one (particles, deposit grid, record so far, time, step and output counters) and writes
-them to one pickle file, atomically, at most every ``every_s`` wall seconds and when SIGTERM/SIGINT
+them to one pickle file (:class:`granudep.checkpoint.CheckpointFile`), atomically, at most every ``every_s`` wall seconds and when SIGTERM/SIGINT
 asks for a stop. A restart replays the finished simulations from the file and continues the
 running one from its last output time: the numba step kernels see exactly the arrays they would
 have seen, so the result is bit-identical to an uninterrupted run.
@@ -14,13 +14,10 @@ with anything different is refused (one line), so a checkpoint never continues a
 from __future__ import annotations
 
 import pickle
-import time
 from pathlib import Path
 from typing import Any, Callable
 
-from .._version import __version__
-from ..config import ConfigError
-from ..io import atomic_path
+from ..checkpoint import CheckpointFile
 from ..progress import LOG
 from ..signals import STOP, RunInterrupted
 
@@ -36,57 +33,28 @@ class DAInterrupted(RunInterrupted):
         self.checkpoint = checkpoint
 
 
-class Checkpointer:
+class Checkpointer(CheckpointFile):
     def __init__(self, identity: str, path: str | Path | None = None, every_s: float = 600.0,
                  restart: str | Path | None = None, progress=None):
-        if not every_s >= 0:
-            raise ConfigError(f"--checkpoint-every: must be >= 0 s (got {every_s!r})")
-        self.identity = identity
-        self.path = Path(path) if path is not None else None
-        self.every_s = float(every_s)
+        super().__init__(identity, path, every_s, fmt=FORMAT, what="DA",
+                         differs="different config, deposition flag or granudep version")
         self.completed: dict[str, Any] = {}
         self.current: tuple[str, bytes] | None = None
         self.restored = 0
         self.progress = progress
-        self._last = time.perf_counter()
         if restart is not None:
             self.load(restart)
 
     # --- file ---------------------------------------------------------------------------------------
     def load(self, path: str | Path) -> None:
-        path = Path(path)
-        if not path.is_file():
-            raise ConfigError(f"--restart: checkpoint file not found: {path}")
-        try:
-            with open(path, "rb") as fh:
-                data = pickle.load(fh)  # noqa: S301 -- our own file, next to our own outputs
-        except Exception as exc:  # noqa: BLE001 -- any unreadable file: one line
-            raise ConfigError(f"--restart: {path} is not a readable granudep checkpoint "
-                              f"({type(exc).__name__}: {' '.join(str(exc).split())[:120]})") from None
-        if not isinstance(data, dict) or data.get("format") != FORMAT:
-            raise ConfigError(f"--restart: {path} is not a granudep DA checkpoint")
-        if data["identity"] != self.identity:
-            raise ConfigError(f"--restart: {path} was written by another run (different config, deposition "
-                              f"flag or granudep version); rerun without --restart or with the same inputs")
+        data = self.read(path)
         self.completed = data["completed"]
         self.current = data["current"]
         LOG.info("restart from %s: %d finished simulation(s)%s", path, len(self.completed),
                  ", one in progress" if self.current else "")
 
     def save(self) -> Path | None:
-        if self.path is None:
-            return None
-        data = {"format": FORMAT, "identity": self.identity, "completed": self.completed,
-                "current": self.current, "version": __version__}
-        blob = pickle.dumps(data, protocol=pickle.HIGHEST_PROTOCOL)
-        atomic_path(self.path, lambda tmp: tmp.write_bytes(blob))
-        self._last = time.perf_counter()
-        LOG.debug("checkpoint written: %s", self.path)
-        return self.path
-
-    def remove(self) -> None:
-        if self.path is not None:
-            self.path.unlink(missing_ok=True)
+        return self.write(completed=self.completed, current=self.current)
 
     # --- hooks --------------------------------------------------------------------------------------
     def simulate(self, key: str, run: Callable[[Any], Any]):
@@ -105,7 +73,7 @@ class Checkpointer:
     def at_output(self, key: str, state_fn: Callable[[], tuple]) -> None:
         if self.progress is not None:
             self.progress.update(state_fn()[5])
-        due = self.path is not None and time.perf_counter() - self._last >= self.every_s
+        due = self.due()
         if not (due or STOP.requested):
             return
         self.current = (key, pickle.dumps(state_fn(), protocol=pickle.HIGHEST_PROTOCOL))

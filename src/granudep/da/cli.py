@@ -4,27 +4,10 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..cliutil import add_run_args, apply_threads, interrupted_path, parse_sets
+from ..cliutil import (add_checkpoint_args, add_run_args, apply_threads, checkpoint_path, interrupted_path,
+                       parse_sets, restart_file)
 from ..io import write_netcdf
 from ..progress import LOG
-
-
-def _restart_file(args, ckpt: Path, identity: str) -> Path | None:
-    """--restart FILE, or --restart auto: the default checkpoint when it exists and matches."""
-    if args.restart is None:
-        return None
-    if args.restart != "auto":
-        return Path(args.restart)
-    if not ckpt.is_file():
-        return None
-    from ..config import ConfigError
-    from .checkpoint import Checkpointer
-    try:
-        Checkpointer(identity, restart=ckpt)
-    except ConfigError as exc:
-        LOG.warning("not restarting: %s; starting afresh", exc)
-        return None
-    return ckpt
 
 
 def _run(args) -> int:
@@ -46,8 +29,9 @@ def _run(args) -> int:
     apply_threads(args.threads)
     out = Path(args.output or default_path(cfg, deposition))
     check_output(out)  # a read-only folder or a non-.nc name costs nothing
-    ckpt = Path(args.checkpoint) if args.checkpoint else out.with_name(f".{out.stem}.ckpt")
-    restart = _restart_file(args, ckpt, checkpoint_identity(cfg))
+    ckpt = checkpoint_path(args, out)
+    from .checkpoint import Checkpointer
+    restart = restart_file(args, ckpt, lambda f: Checkpointer(checkpoint_identity(cfg), restart=f))
     LOG.info("DA %s (%s deposition) -> %s", cfg.case, "with" if deposition else "without", out)
     try:
         with graceful_stop():
@@ -118,12 +102,7 @@ def register(subparsers) -> None:
     p.add_argument("--x-inf-mode", choices=["self-consistent", "no-deposition", "user"], help="how x_inf in [x] is set")
     p.add_argument("--x-inf", type=float, metavar="X",
                    help="x_inf in m from the back wall (implies --x-inf-mode user)")
-    p.add_argument("--checkpoint", metavar="FILE", help="checkpoint file (default OUT folder/.{OUT stem}.ckpt)")
-    p.add_argument("--checkpoint-every", type=float, default=600.0, metavar="S",
-                   help="wall seconds between checkpoints (default 600; SIGTERM/SIGINT always write one)")
-    p.add_argument("--restart", metavar="CHECKPOINT|auto",
-                   help="continue an interrupted run from its checkpoint (bit-identical); 'auto': the default "
-                        "checkpoint if it exists and matches the inputs")
+    add_checkpoint_args(p)
     p.add_argument("--progress", choices=["auto", "log", "bar", "off"], default="log",
                    help="progress: plain log lines (default), a tqdm bar, auto (bar in a terminal) or off")
     add_run_args(p, "numerics.cfl=0.3")

@@ -6,9 +6,11 @@ from typing import Any
 
 import xarray as xr
 
+from ..checkpoint import identity as checkpoint_identity
 from ..io import check_output, write_netcdf
 from ..progress import LOG, Progress, make_progress
 from ..signals import STOP, RunInterrupted
+from .checkpoint import IsphCheckpointer
 from .config import IsphConfig, load_config
 from .output import build_dataset
 from .solver import IsphBlowUp, run
@@ -20,6 +22,7 @@ class IsphInterrupted(IsphBlowUp, RunInterrupted):
     def __init__(self, message: str, signum: int):
         IsphBlowUp.__init__(self, message)
         self.signum = signum
+        self.checkpoint = None  # the checkpoint written at the stop (run_config sets it)
 
 
 def _stop(cfg: IsphConfig):
@@ -28,8 +31,8 @@ def _stop(cfg: IsphConfig):
     return on_stop
 
 
-def run_isph(case_or_config: Any, output: str | Path | None = None, progress: Any = None,
-             **overrides) -> xr.Dataset:
+def run_isph(case_or_config: Any, output: str | Path | None = None, progress: Any = None, checkpoint=None,
+             checkpoint_every: float = 600.0, restart=None, **overrides) -> xr.Dataset:
     """Run a 2D ISPH case (Table 1 name, T22-A30/A45/A124, YAML path, mapping or IsphConfig).
 
     ``overrides`` name config fields (``dx=0.008``, ``t_end=1.0``, ``wall.slip="no_slip"``) or
@@ -38,23 +41,35 @@ def run_isph(case_or_config: Any, output: str | Path | None = None, progress: An
     snapshots so far are written with ``status = "failed: ..."`` and IsphBlowUp is re-raised.
     ``progress``: None/"auto" (a tqdm bar in a terminal or notebook, plain log lines otherwise),
     "log", "bar", False (silent). Bad input raises ConfigError before any work.
+
+    ``checkpoint``: a file the run state is written to every ``checkpoint_every`` wall seconds and
+    on SIGTERM/SIGINT (inside :func:`granudep.signals.graceful_stop`); ``restart``: such a file to
+    continue from (bit-identical to an uninterrupted run; refused for another config). A stop raises
+    :class:`IsphInterrupted` with the partial dataset as ``dataset`` and the file as ``checkpoint``;
+    a finished run removes its checkpoint.
     """
     cfg = load_config(case_or_config, **overrides)
     if output is not None:
         check_output(output)
-    return run_config(cfg, output=output, progress=progress)
+    return run_config(cfg, output=output, progress=progress, checkpoint=checkpoint,
+                      checkpoint_every=checkpoint_every, restart=restart)
 
 
-def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any = "log") -> xr.Dataset:
+def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any = "log", checkpoint=None,
+               checkpoint_every: float = 600.0, restart=None) -> xr.Dataset:
+    ckpt = IsphCheckpointer(checkpoint_identity(cfg), checkpoint, checkpoint_every, restart)  # errors before work
     LOG.info("isph %s: theta=%.1f deg, L0=%.3f m, H0=%.3f m, dx=%.4f m, t_end=%.3f s (%.1f t_c), slip=%s",
              cfg.case, cfg.geometry.theta_deg, cfg.geometry.L0, cfg.geometry.H0, cfg.numerics.dx, cfg.t_end,
              cfg.t_end / cfg.t_c, cfg.wall.slip)
     prog = make_progress(progress, cfg.output.progress_s, total=cfg.t_end, on_stop=_stop(cfg), desc=f"isph {cfg.case}")
     try:
-        solver, snaps, status, ttr = run(cfg, on_snapshot=lambda s, snaps: prog.update(s.t), progress=prog)
+        solver, snaps, status, ttr = run(cfg, on_snapshot=lambda s, snaps: prog.update(s.t), progress=prog,
+                                         checkpoint=ckpt)
     except IsphBlowUp as exc:
         prog.close()
         interrupted = isinstance(exc, IsphInterrupted)
+        if interrupted:
+            exc.checkpoint = ckpt.written
         ds = build_dataset(cfg, exc.solver, exc.snapshots, f"{'interrupted' if interrupted else 'failed'}: {exc}",
                            float("nan"))
         exc.dataset = ds
@@ -78,6 +93,7 @@ def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any 
              solver.n0, solver.stats.steps, ds.attrs["ms_per_step"])
     if output is not None:
         write_netcdf(ds, output)
+    ckpt.remove()  # a finished run (its output written) needs no checkpoint
     return ds
 
 

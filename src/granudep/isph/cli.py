@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..cliutil import add_run_args, apply_threads, parse_sets
+from ..cliutil import add_checkpoint_args, add_run_args, apply_threads, checkpoint_path, parse_sets, restart_file
 
 
 def _cmd_isph(args) -> int:
@@ -17,11 +17,17 @@ def _cmd_isph(args) -> int:
     out = Path(args.output) if args.output else Path("results/isph") / f"{cfg.case}.nc"
     apply_threads(args.threads)
     check_output(out)  # before any work: a read-only folder or a non-.nc name costs nothing
+    from ..checkpoint import identity
+    from .checkpoint import IsphCheckpointer
+    ckpt = checkpoint_path(args, out)
+    restart = restart_file(args, ckpt, lambda f: IsphCheckpointer(identity(cfg), restart=f))
     try:
         with graceful_stop():
-            run_config(cfg, output=out, progress=args.progress)
+            run_config(cfg, output=out, progress=args.progress, checkpoint=ckpt,
+                       checkpoint_every=args.checkpoint_every, restart=restart)
     except IsphInterrupted as exc:
-        LOG.error("%s at t = %.4f s; partial output in %s", exc, exc.solver.t, getattr(exc, "output", "-"))
+        LOG.error("%s at t = %.4f s; partial output in %s, checkpoint %s (continue with --restart %s)", exc,
+                  exc.solver.t, getattr(exc, "output", "-"), exc.checkpoint, exc.checkpoint)
         return 128 + int(exc.signum)
     except IsphBlowUp as exc:
         LOG.error("%s", exc)
@@ -47,6 +53,7 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", default=None, help="output NetCDF (.nc; default results/isph/{case}.nc)")
     p.add_argument("--progress", choices=["auto", "log", "bar", "off"], default="log",
                    help="progress: plain log lines (default), a tqdm bar, auto (bar in a terminal) or off")
+    add_checkpoint_args(p)
     add_run_args(p, "numerics.cfl=0.1")
     p.set_defaults(func=_cmd_isph)
     p = sub.add_parser("isph-vtk", help="export a 2D ISPH run to ParaView (.vtp per snapshot + .pvd)")

@@ -677,15 +677,38 @@ def surface_profile(x: np.ndarray, y: np.ndarray, dx: float, length: float):
     return edges, depth
 
 
-def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, solver: IsphSolver | None = None):
+@dataclass
+class RunState:
+    """Everything the time loop of :func:`run` carries from one step to the next: the solver (particles,
+    warm-start arrays, statistics, energy budget), the snapshots so far and the loop's counters. A
+    checkpoint (:mod:`.checkpoint`) is this object pickled after a step; :func:`run` given it
+    continues exactly where it stood."""
+    solver: IsphSolver
+    snaps: Snapshots
+    next_out: float
+    rest_since: float | None = None
+    started: bool = False
+    time_to_rest: float = float("nan")
+    status: str = "t_end reached"
+    done: bool = False
+
+
+def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, solver: IsphSolver | None = None,
+        checkpoint=None):
     """Advance to rest or t_end, storing snapshots every ``output.interval``.
 
     Returns (solver, snapshots, status, time_to_rest). Raises IsphBlowUp with the partial
-    snapshots attached (``exc.snapshots``) on NaN or escape.
+    snapshots attached (``exc.snapshots``) on NaN or escape. ``checkpoint``
+    (:class:`.checkpoint.IsphCheckpointer`): its ``resume()`` gives a :class:`RunState` to continue,
+    its ``after_step(state, at_output)`` is called after every step (it writes the checkpoint file
+    when due, and at an output time when SIGTERM/SIGINT asked for a stop).
     """
-    s = solver if solver is not None else IsphSolver(cfg)
     out = cfg.output
-    snaps = Snapshots()
+    st = checkpoint.resume() if checkpoint is not None else None
+    resumed = st is not None
+    if st is None:
+        st = RunState(solver if solver is not None else IsphSolver(cfg), Snapshots(), out.interval)
+    s, snaps = st.solver, st.snaps
     t_end = cfg.t_end
     progress = progress or Progress(out.progress_s)
     tol = 1e-9
@@ -732,52 +755,53 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
                 f"{s.step_no / el:.1f} steps/s, dt={s.dt:.2e} s, front={snaps.front[-1] if snaps.front else float('nan'):.4f} m, "
                 f"KE={s.kinetic_energy():.3e} J/m, max|u|={s.max_speed():.3e} m/s")
 
-    snap()
-    next_out = out.interval
-    rest_since = None
-    started = False
-    time_to_rest = float("nan")
-    status = "t_end reached"
-    wall0 = _time.perf_counter()
+    if not resumed:
+        snap()
+    wall0 = _time.perf_counter() - s.stats.wall_s  # a restart goes on counting the wall time
     try:
-        while s.t < t_end - tol:
+        while not st.done and s.t < t_end - tol:
             if s.step_no >= cfg.numerics.max_steps:
-                status = f"max_steps ({cfg.numerics.max_steps}) reached"
+                st.status = f"max_steps ({cfg.numerics.max_steps}) reached"
                 break
             if s.nf == 0:
-                status = "every particle left through the outflow"
+                st.status = "every particle left through the outflow"
                 break
             dt = s.time_step()
-            dt = step_towards(dt, min(next_out, t_end) - s.t)
+            dt = step_towards(dt, min(st.next_out, t_end) - s.t)
             s.dt = dt
             s.step(dt)
             s.stats.wall_s = _time.perf_counter() - wall0
-            if s.t >= next_out - tol:
+            at_output = s.t >= st.next_out - tol
+            if at_output:
                 snap()
-                next_out += out.interval
-                progress(message)
+                st.next_out += out.interval
                 # rest: the max speed of all granular particles (every particle deposited), or the
                 # rms speed of those behind the front (a gap of one empty dx cell in a thin deposit
                 # moves the front back, so the max is taken over all particles)
                 vmax = s.mass_speed(math.inf if out.rest_measure == "max" else snaps.front[-1], out.rest_measure)
                 if vmax > 10.0 * out.rest_speed or s.t > 5.0 * cfg.t_c:
-                    started = True
-                if started and vmax < out.rest_speed:
-                    if rest_since is None:
-                        rest_since = s.t
+                    st.started = True
+                if st.started and vmax < out.rest_speed:
+                    if st.rest_since is None:
+                        st.rest_since = s.t
                 else:
-                    rest_since = None
-                if rest_since is not None and s.t - rest_since >= out.rest_duration - tol:
-                    time_to_rest = rest_since
+                    st.rest_since = None
+                if st.rest_since is not None and s.t - st.rest_since >= out.rest_duration - tol:
+                    st.time_to_rest = st.rest_since
                     if out.stop_at_rest:
-                        status = "at rest"
-                        break
+                        st.status = "at rest"
+                        st.done = True
+            if checkpoint is not None:
+                checkpoint.after_step(st, at_output)
+            if at_output:
+                progress(message)  # raises the stage's interruption when SIGTERM/SIGINT asked for a stop
     except IsphBlowUp as exc:
         s.stats.wall_s = _time.perf_counter() - wall0
         exc.snapshots = snaps
         exc.solver = s
         raise
     s.stats.wall_s = _time.perf_counter() - wall0
+    status, time_to_rest, rest_since = st.status, st.time_to_rest, st.rest_since
     if math.isnan(time_to_rest) and rest_since is not None and s.t - rest_since >= out.rest_duration - tol:
         time_to_rest = rest_since
     if status != "at rest" and not math.isnan(time_to_rest):
