@@ -357,7 +357,8 @@ class IsphSolver:
 
     def _project_adjoint_pair(self, start, nbr, rx, ry, rr, gw, lmat_p, conc, us, vs, dt):
         """Adjoint-pair projection (:func:`projection.adjoint_pair_projection`): G = −Dᵀ, walls carry
-        pressure, kinetic energy never rises through the pressure."""
+        pressure; the pressure cannot raise the kinetic energy except through the free-surface
+        Dirichlet value and the density source (docs/paper-notes.md, session 6)."""
         c = self.cfg
         nf = self.nf
         nw = self.parts.wnx.size
