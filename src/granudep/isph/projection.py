@@ -273,82 +273,79 @@ def assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n
     b_U − A_UK p_K (Gustavson's row-by-row product with a dense accumulator).
 
     ``rows, cols, cx, cy``: D in COO (:func:`divergence_entries`); ``ei, ej, ea``: the edges of L_c;
-    ``unknown[node]``: the unknown's index or −1 (known, value ``p[node]``)."""
-    # D by node (rows) and by particle (columns)
+    ``unknown[node]``: the unknown's index or −1 (known, value ``p[node]``), the unknowns numbered in
+    node order."""
+    # D by node (rows) and by particle (columns), gathered into contiguous arrays
     rptr, rperm = coo_to_csr(rows, n)
     cptr, cperm = coo_to_csr(cols, nf)
+    r_col = cols[rperm]
+    r_x = cx[rperm]
+    r_y = cy[rperm]
+    c_row = rows[cperm]
+    c_x = cx[cperm]
+    c_y = cy[cperm]
     # L_c by node: both directions of each edge
     ne = ei.size
     lrows = np.empty(2 * ne, np.int64)
-    lcols = np.empty(2 * ne, np.int64)
-    lval = np.empty(2 * ne)
     lrows[:ne] = ei
     lrows[ne:] = ej
-    lcols[:ne] = ej
-    lcols[ne:] = ei
-    lval[:ne] = ea
-    lval[ne:] = ea
     lptr, lperm = coo_to_csr(lrows, n)
+    l_col = np.empty(2 * ne, np.int64)
+    l_val = np.empty(2 * ne)
+    for q in range(2 * ne):
+        e = lperm[q]
+        if e < ne:
+            l_col[q] = ej[e]
+            l_val[q] = ea[e]
+        else:
+            l_col[q] = ei[e - ne]
+            l_val[q] = ea[e - ne]
     wd = 1.0 - stab
     acc = np.zeros(n)
     mark = np.full(n, -1, np.int64)
     lst = np.empty(n, np.int64)
-    indptr = np.zeros(n_unknown + 1, np.int64)
-    # pass 1: pattern size of each unknown row
+    # one pass into an upper bound of the pattern, compacted below
+    bound = 0
     for a in range(n):
-        ra = unknown[a]
-        if ra < 0:
+        if unknown[a] < 0:
             continue
-        cnt = 0
-        mark[a] = a
-        cnt += 1
+        bound += 1 + lptr[a + 1] - lptr[a]
         for q in range(rptr[a], rptr[a + 1]):
-            i = cols[rperm[q]]
-            for s in range(cptr[i], cptr[i + 1]):
-                bn = rows[cperm[s]]
-                if unknown[bn] >= 0 and mark[bn] != a:
-                    mark[bn] = a
-                    cnt += 1
-        for q in range(lptr[a], lptr[a + 1]):
-            bn = lcols[lperm[q]]
-            if unknown[bn] >= 0 and mark[bn] != a:
-                mark[bn] = a
-                cnt += 1
-        indptr[ra + 1] = cnt
-    for r in range(n_unknown):
-        indptr[r + 1] += indptr[r]
-    indices = np.empty(indptr[n_unknown], np.int64)
-    data = np.empty(indptr[n_unknown])
+            i = r_col[q]
+            bound += cptr[i + 1] - cptr[i]
+    rowlen = np.zeros(n_unknown, np.int64)
+    indices = np.empty(bound, np.int64)
+    data = np.empty(bound)
     rhs = np.zeros(n_unknown)
-    mark[:] = -1
-    # pass 2: values
+    pos = 0
+    expect = 0
     for a in range(n):
         ra = unknown[a]
         if ra < 0:
             continue
+        if ra != expect:
+            raise ValueError("assemble_adjoint_ppe: unknowns must be numbered in node order")
+        expect += 1
         m = 0
         mark[a] = a
         lst[m] = a
         m += 1
         acc[a] = 0.0
         for q in range(rptr[a], rptr[a + 1]):
-            e = rperm[q]
-            i = cols[e]
-            ax = cx[e]
-            ay = cy[e]
-            for s in range(cptr[i], cptr[i + 1]):
-                f = cperm[s]
-                bn = rows[f]
+            i = r_col[q]
+            ax = r_x[q]
+            ay = r_y[q]
+            for t in range(cptr[i], cptr[i + 1]):
+                bn = c_row[t]
                 if mark[bn] != a:
                     mark[bn] = a
                     lst[m] = bn
                     m += 1
                     acc[bn] = 0.0
-                acc[bn] += wd * (ax * cx[f] + ay * cy[f])
+                acc[bn] += wd * (ax * c_x[t] + ay * c_y[t])
         for q in range(lptr[a], lptr[a + 1]):
-            e = lperm[q]
-            bn = lcols[e]
-            w = stab * lval[e]
+            bn = l_col[q]
+            w = stab * l_val[q]
             if mark[bn] != a:
                 mark[bn] = a
                 lst[m] = bn
@@ -356,7 +353,7 @@ def assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n
                 acc[bn] = 0.0
             acc[bn] -= w
             acc[a] += w
-        pos = indptr[ra]
+        start_pos = pos
         indices[pos] = ra
         data[pos] = acc[a]
         pos += 1
@@ -371,7 +368,13 @@ def assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n
             else:
                 ba -= acc[bn] * p[bn]
         rhs[ra] = ba
-    return indptr, indices, data, rhs
+        rowlen[ra] = pos - start_pos
+    indptr = np.zeros(n_unknown + 1, np.int64)
+    for r in range(n_unknown):
+        indptr[r + 1] = indptr[r] + rowlen[r]
+    # the rows were written in node order, which is the unknown order (unknown[] increases with
+    # the node index), so the compacted arrays are the first indptr[-1] entries
+    return indptr, indices[:indptr[n_unknown]].copy(), data[:indptr[n_unknown]].copy(), rhs
 
 
 @njit(cache=True)
