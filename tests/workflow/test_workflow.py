@@ -54,7 +54,12 @@ ONE_LINE_REFUSALS = [
     ("sensitivity: {critical_speed: [-1.0]}\n", "sensitivity.critical_speed[0]: sensitivity monitor"),
     ("monitor: {width_factor: 80}\n", "monitor.width_factor: monitor: monitor.width_factor: must be > 0.0 and <= 50.0"),
     ("convergence: {dx: [0.2, 0.01]}\n", "convergence.dx[0]: convergence isph run dx = 0.2: numerics.dx: must be"),
+    ("isph: {set: {numerics.projection: exact}}\n",
+     "isph.set.numerics.projection: isph run 'T10-A35': numerics.projection: must be one of"),
+    ("isph: {set: {wall.coulomb_normal: projection}}\n",
+     "isph.set.wall.coulomb_normal: isph run 'T10-A35': wall.coulomb_normal: projection needs"),
 ]
+ISPH_SET = "isph: {set: {numerics.projection: adjoint_pair, wall.coulomb_normal: projection}}\n"
 YAML_1_2 = "isph: {dx: 5e-3}\n"
 NO_2D_REFERENCE = {"da": {"cases": ["1D-A70", "1D-A99"]}}
 
@@ -77,6 +82,8 @@ def dry_run_args(item) -> list[tuple[str, ...]]:
         "test_dry_run_reads_yaml_1_2_numbers": lambda: [("-j2", "results/isph/T22-A70.nc", "--configfile",
                                                          str(overlay(YAML_1_2)))],
         "test_da_case_without_2d_reference_is_refused": lambda: [(*cfg, str(overlay(NO_2D_REFERENCE)))],
+        "test_isph_set_reaches_every_2d_run": lambda: [("-j2", "results/isph/T22-A70.nc", "--configfile",
+                                                        str(overlay(ISPH_SET)))],
     }.get(name, lambda: [])()
 
 
@@ -189,6 +196,14 @@ def test_dry_run_refuses_what_the_jobs_would_in_one_line(workdir, content, expec
     assert len(lines) == 1, out
     assert lines[0].startswith(f"granudep: {path}: {expected}"), out
     assert not jobs
+
+
+def test_isph_set_reaches_every_2d_run(workdir):
+    # the scheme options of config isph.set go to the 2D runs as --set (validated at parse time)
+    path = overlay(ISPH_SET)
+    rc, out, jobs = dry_run(workdir, "-j2", "results/isph/T22-A70.nc", "--configfile", str(path))
+    assert rc == 0, out
+    assert "--set numerics.projection=adjoint_pair --set wall.coulomb_normal=projection" in out, out
 
 
 def test_dry_run_reads_yaml_1_2_numbers(workdir):

@@ -83,6 +83,19 @@ def isph_dx(case):
     return config["isph"]["dx_per_case"].get(case, config["isph"]["dx"])
 
 
+def isph_set_options():
+    """``--set KEY=VALUE`` for every entry of config ``isph.set`` (scheme options of every 2D run,
+    e.g. numerics.projection: adjoint_pair), values written as YAML scalars."""
+    import shlex
+    import yaml
+
+    out = []
+    for key, value in config["isph"].get("set", {}).items():
+        text = yaml.safe_dump(value, default_flow_style=True).strip().removesuffix("...").strip()
+        out.append(f"--set {shlex.quote(f'{key}={text}')}")
+    return " ".join(out)
+
+
 def isph_source(case):
     """What `granudep isph` is given: a paper case name, or the generated YAML of a user case."""
     return f"{RESULTS}/user_cases/{case}.yaml" if case in USER_CASES else case

@@ -36,6 +36,7 @@ rule isph_run:
         source=lambda wc: isph_source(wc.case),
         dx=lambda wc: isph_dx(wc.case),
         t_end=lambda wc: f"--t-end {config['isph']['t_end']}" if config["isph"].get("t_end") else "",
+        set=isph_set_options(),
     log:
         f"{LOGS}/isph/{{case}}.log",
     benchmark:
@@ -45,5 +46,5 @@ rule isph_run:
         runtime=240,
         mem_mb=4000,
     shell:
-        "NUMBA_NUM_THREADS={threads} granudep isph {params.source} --dx {params.dx} {params.t_end}"
+        "NUMBA_NUM_THREADS={threads} granudep isph {params.source} --dx {params.dx} {params.t_end} {params.set}"
         " --restart auto -o {output} > {log} 2>&1"

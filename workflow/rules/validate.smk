@@ -26,6 +26,10 @@ def _geometry_keys(case):
         if case in USER_CASES else {}
 
 
+def _isph_set_keys():
+    return {k: ("isph", "set", k) for k in config["isph"].get("set", {})}
+
+
 def _isph_t_end():
     return config["isph"].get("t_end") or None
 
@@ -35,9 +39,9 @@ def _validation_jobs():
     dx_per_case = config["isph"]["dx_per_case"]
     for case in ISPH_CASES:  # rule isph_run
         keys = {"numerics.dx": ("isph", "dx_per_case", case) if case in dx_per_case else ("isph", "dx"),
-                "numerics.t_end": ("isph", "t_end"), **_geometry_keys(case)}
+                "numerics.t_end": ("isph", "t_end"), **_isph_set_keys(), **_geometry_keys(case)}
         jobs.append(isph_job(f"isph run {case!r}", _isph_source(case), _isph_case_key(case), keys,
-                             dx=isph_dx(case), t_end=_isph_t_end()))
+                             dx=isph_dx(case), t_end=_isph_t_end(), **config["isph"].get("set", {})))
     wkeys = {"monitor.width_factor": ("monitor", "width_factor")}
     jobs.append(monitor_job("monitor", ("monitor", "width_factor"), wkeys,
                             width_factor=config["monitor"]["width_factor"]))  # rule monitor
@@ -55,8 +59,9 @@ def _validation_jobs():
     # target `convergence`
     for j, dx in enumerate(CONV["dx"]):
         jobs.append(isph_job(f"convergence isph run dx = {dx}", CONV["isph_case"], ("convergence", "isph_case"),
-                             {"numerics.dx": ("convergence", "dx", j), "numerics.t_end": ("isph", "t_end")},
-                             dx=dx, t_end=_isph_t_end()))
+                             {"numerics.dx": ("convergence", "dx", j), "numerics.t_end": ("isph", "t_end"),
+                              **_isph_set_keys()},
+                             dx=dx, t_end=_isph_t_end(), **config["isph"].get("set", {})))
     for j, n in enumerate(CONV["da_n_particles"]):
         for case in DA_CASES:
             for variant in DA_VARIANTS:
@@ -70,7 +75,8 @@ def _validation_jobs():
         key = ("sensitivity", param, SENS[param].index(sens_split(sens)[1])) if param else ("sensitivity", "isph_case")
         if param in SENS_ISPH_KEYS or param is None:
             jobs.append(isph_job(f"sensitivity isph run {sens!r}", sens_override(SENS_ISPH_KEYS, sens, SENS["isph_case"]),
-                                 key, {"numerics.dx": ("sensitivity", "dx")}, dx=SENS["dx"]))
+                                 key, {"numerics.dx": ("sensitivity", "dx"), **_isph_set_keys()}, dx=SENS["dx"],
+                                 **config["isph"].get("set", {})))
         opts = {}
         if param in SENS_MONITOR_OPTIONS:
             opts = {{"critical_speed": "critical_speed", "divergence_threshold": "interface_threshold"}[param]: sens_split(sens)[1]}
