@@ -37,7 +37,7 @@ SCHEMA_REFUSALS = [
     ({"da": {"ab_source": "guess"}}, "da.ab_source: must be one of ['paper', 'computed'] (got 'guess')"),
     ({"user_cases": [{"name": "x", "theta_deg": 20, "L0": 0.2, "H0": 0}]},
      "user_cases[0].H0: isph run 'x': geometry.H0: must be > 0.0"),
-    ({"isph": {"dxx": 0.004}}, "isph.dxx: unknown key (allowed: cases, dx, dx_per_case, t_end, table5_geometries, threads)"),
+    ({"isph": {"dxx": 0.004}}, "isph.dxx: unknown key (allowed: cases, dx, dx_per_case, set, t_end, table5_geometries, threads)"),
 ]
 # Issue 14 item 4: each of these passed `snakemake -n` before and was refused only by the job.
 ONE_LINE_REFUSALS = [
