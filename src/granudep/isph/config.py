@@ -135,7 +135,7 @@ class Numerics:
                                       doc="weight of the density-invariant source (1 - C_i/C0)/dt^2 in the PPE")
     free_surface_pressure: str = param("half_layer", choices=("half_layer", "zero"),
                                        doc="Dirichlet value on free-surface particles: rho g cos(theta) dx/2 or 0")
-    ppe_divergence: str = param("renormalised", choices=("renormalised", "adjoint", "with_walls"),
+    ppe_divergence: str = param("renormalised", choices=("renormalised", "adjoint"),
                                 doc="divergence of the PPE source: the renormalised divergence (exact for linear "
                                     "fields), or the negative adjoint of the corrector's pressure gradient "
                                     "(energy-consistent projection, isph/projection.py)")
@@ -143,7 +143,7 @@ class Numerics:
                             doc="pressure projection: the approximate projection (compact-Laplacian PPE, "
                                 "renormalised difference gradient, mirror-pressure walls), or the adjoint pair "
                                 "(corrector gradient G = -D^T of the renormalised divergence D, PPE "
-                                "(D D^T + eps L_c) p, wall particles carrying pressure: energy-stable, "
+                                "((1 - eps) D D^T + eps L_c) p, wall particles carrying pressure: energy-stable, "
                                 "isph/projection.py)")
     projection_stabilisation: float = param(0.01, ge=0.0, le=0.5, unit="1",
                                             doc="adjoint_pair: PPE operator (1 - eps) D D^T + eps L_c; the compact "

@@ -173,28 +173,6 @@ def compact_laplacian_edges(start, nbr, rr, gw, nf, vol, eps2, lap_norm):
     return ei, ej, ea
 
 
-@njit(cache=True)
-def diag_first(indptr, indices, data):
-    """Put each row's diagonal entry first (the layout :mod:`.linsolve` expects), in place; a row
-    without a stored diagonal gets none (returns False)."""
-    n = indptr.size - 1
-    for r in range(n):
-        a = indptr[r]
-        found = False
-        for q in range(a, indptr[r + 1]):
-            if indices[q] == r:
-                indices[q] = indices[a]
-                indices[a] = r
-                t = data[q]
-                data[q] = data[a]
-                data[a] = t
-                found = True
-                break
-        if not found:
-            return False
-    return True
-
-
 def adjoint_pair_projection(start, nbr, rx, ry, rr, gw, nf, nw, vol, lmat, wnx, wny, fs, p_fs, us, vs, conc, c0,
                             relax, dt, rho, eps2, lap_norm, stab, guess, solve, wall_dry, max_passes=1, release=True):
     """Solve ((1 − ε) D Dᵀ + ε L_c) p = −(ρ/Δt) D u* + s on the interior granular and the wetted wall nodes

@@ -29,8 +29,7 @@ from . import physics as ph
 from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_work, viscous_dissipation
 from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
-from .projection import (adjoint_divergence, adjoint_pair_projection, apply_divergence, divergence_entries,
-                         wall_normal_acceleration)
+from .projection import adjoint_divergence, adjoint_pair_projection, wall_normal_acceleration
 from .linsolve import BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair
 from .neighbours import build_neighbours
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
@@ -332,9 +331,6 @@ class IsphSolver:
         nf, h, vol, rho, P = self.nf, self.h, self.vol, self.rho, self.parts
         if c.numerics.ppe_divergence == "adjoint":
             div = adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, us, vs, lmat_p)
-        elif c.numerics.ppe_divergence == "with_walls":
-            rows, cols, cx, cy = divergence_entries(start, nbr, rx, ry, gw, nf, vol, lmat, P.wnx, P.wny)
-            div = apply_divergence(nf + P.wnx.size, rows, cols, cx, cy, us, vs)[:nf]
         else:
             div = ph.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
         unknown = np.full(nf, -1, np.int64)
