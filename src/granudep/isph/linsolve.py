@@ -44,6 +44,30 @@ NONFINITE = -3
 DOT_BLAS_MAX = 10000
 
 
+_BLAS_PINNED = False
+
+
+def pin_blas_to_one_thread() -> None:
+    """Run the BLAS that the numba kernels call (``np.dot`` → scipy's OpenBLAS ddot) on one thread,
+    for the whole process, once.
+
+    OpenBLAS splits a ddot over its threads once the vectors exceed 10 000 entries: every CG
+    iteration (three dot products) then wakes and synchronises the BLAS threads, which compete with
+    the numba ``prange`` threads and with the other jobs of ``snakemake -j2``. Measured on this 2-core
+    machine (T22-A70 at dx = 1.4 mm, 14 504 PPE unknowns, adjoint-pair PPE, the other core busy):
+    Jacobi-CG 13.2 ns per nonzero and iteration with two BLAS threads against 4.8 with one, the
+    whole run 1 → 2 steps/s; below 10 000 unknowns nothing changes. It also makes the partial sums
+    of the dot products (hence the trajectories, which amplify round-off) independent of the
+    machine's core count. The numba kernels are the parallel layer (``NUMBA_NUM_THREADS``)."""
+    global _BLAS_PINNED
+    if _BLAS_PINNED:
+        return
+    import scipy.linalg.cython_blas  # noqa: F401 -- the BLAS numba's np.dot calls: load it before limiting
+    from threadpoolctl import threadpool_limits
+    threadpool_limits(limits=1, user_api="blas")
+    _BLAS_PINNED = True
+
+
 @njit(cache=True)
 def _dot(a, b):
     """a·b for the (M)IC-CG: BLAS ddot (np.dot) up to DOT_BLAS_MAX entries, so that the runs of up

@@ -30,7 +30,7 @@ from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_wor
 from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
 from .projection import adjoint_divergence, adjoint_pair_projection, wall_normal_acceleration
-from .linsolve import BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair
+from .linsolve import BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pin_blas_to_one_thread
 from .neighbours import build_neighbours
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
                     reference_laplacian_sum)
@@ -91,6 +91,7 @@ class IsphSolver:
     """State + stepping for one configuration."""
 
     def __init__(self, cfg: IsphConfig, particles: Particles | None = None):
+        pin_blas_to_one_thread()
         self.cfg = cfg
         c = cfg
         if c.numerics.pressure_solver.startswith("amg_"):
