@@ -79,13 +79,14 @@ def _solver():
     return IsphSolver(load_config("T22-A70", dx=0.01, t_end=0.05))
 
 
-@pytest.mark.parametrize("dic", [True, False])
-def test_solver_falls_back_to_direct_on_an_indefinite_matrix(dic):
+@pytest.mark.parametrize("method", ["dic", "jacobi", "two_level"])
+def test_solver_falls_back_to_direct_on_an_indefinite_matrix(method):
     s = _solver()
     indptr, indices, data = _indefinite()
     n = indptr.size - 1
     b = np.random.default_rng(2).standard_normal(n)
-    x = s._solve_cg(indptr, indices, data, b, np.zeros(n), "ppe", dic=dic)
+    x = s._solve_cg(indptr, indices, data, b, np.zeros(n), "ppe", method=method)
+    dic = method == "dic"
     exact = spla.spsolve(_dense(indptr, indices, data).tocsc(), b)
     assert s.stats.fallbacks == 1
     assert np.abs(x - exact).max() < 1e-9 * np.abs(exact).max()
@@ -148,7 +149,7 @@ def test_singular_direct_solve_is_a_blow_up_not_a_crash():
     indices = np.array([0, 1, 1, 0])
     data = np.array([1.0, 1.0, 1.0, 1.0])  # [[1, 1], [1, 1]]: exactly singular
     with pytest.raises(IsphBlowUp, match="direct solver failed"):
-        s._solve_cg(indptr, indices, data, np.array([1.0, 0.0]), np.zeros(2), "ppe", dic=True)
+        s._solve_cg(indptr, indices, data, np.array([1.0, 0.0]), np.zeros(2), "ppe", method="dic")
     assert s.stats.fallbacks == 1
 
 

@@ -153,10 +153,13 @@ class Numerics:
                                          "pull the flow) is held at p = 0 from the next step until the flow "
                                          "presses into it again")
     kernel_completion: bool = param(True, doc="PPE: missing neighbours next to the free surface count as p = 0")
-    pressure_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic", "amg_sa", "amg_rs"),
+    pressure_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic", "cg_two_level", "amg_sa", "amg_rs"),
                                  doc="PPE: SuperLU factorisation, Jacobi-preconditioned CG (warm start; scipy's "
                                      "iterates bit for bit), CG with diagonal incomplete Cholesky (Eisenstat; "
-                                     "~2.5x fewer iterations, ~2x faster, true-residual stopping test), or CG "
+                                     "~2.5x fewer iterations, ~2x faster, true-residual stopping test; with "
+                                     "projection adjoint_pair, where incomplete Cholesky breaks down, cg_dic "
+                                     "means cg_two_level), two-level CG (Jacobi + an aggregation coarse space; "
+                                     "dx-independent iterations), or CG "
                                      "preconditioned by an algebraic-multigrid V-cycle (pyamg, optional package: "
                                      "smoothed aggregation or Ruge-Stuben; N-independent iterations but slower "
                                      "at 3.7k-60k particles, see docs/paper-notes.md)")

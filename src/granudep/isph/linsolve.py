@@ -56,7 +56,8 @@ def pin_blas_to_one_thread() -> None:
     the numba ``prange`` threads and with the other jobs of ``snakemake -j2``. Measured on this 2-core
     machine (T22-A70 at dx = 1.4 mm, 14 504 PPE unknowns, adjoint-pair PPE, the other core busy):
     Jacobi-CG 13.2 ns per nonzero and iteration with two BLAS threads against 4.8 with one, the
-    whole run 1 → 2 steps/s; below 10 000 unknowns nothing changes. It also makes the partial sums
+    whole run 1 → 2 steps/s; below 10 000 unknowns nothing changes. (The (M)IC-CG already avoids
+    BLAS above that size, :func:`_dot`; the Jacobi-CG keeps ``np.dot`` for scipy's iterates.) It also makes the partial sums
     of the dot products (hence the trajectories, which amplify round-off) independent of the
     machine's core count. The numba kernels are the parallel layer (``NUMBA_NUM_THREADS``)."""
     global _BLAS_PINNED
@@ -794,3 +795,147 @@ def pcg_dic_two(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, max
         its[s] = it
         infos[s] = info
     return xs[0].copy(), its[0], infos[0], xs[1].copy(), its[1], infos[1]
+
+
+# ------------------------------------------------------------------------------------------------
+# Two-level CG: Jacobi plus an aggregation coarse space (``numerics.pressure_solver: cg_two_level``;
+# the adjoint-pair PPE's solver, where incomplete Cholesky breaks down)
+#
+# M⁻¹ r = D⁻¹ r + P A_c⁻¹ Pᵀ r,  A_c = Pᵀ A P,  P the piecewise-constant prolongation of aggregates
+# of the matrix graph (each root takes its whole row: ~65 nodes for the 2-ring adjoint-pair operator).
+# The additive form is symmetric positive definite for any SPD A (A_c = PᵀAP is SPD for a P of full
+# column rank), so plain CG applies. Jacobi alone leaves the smooth modes, whose number grows as
+# 1/dx (T22-A70, adjoint-pair PPE: 79 / 143 / 184 iterations at 4 / 2 / 1.4 mm); the coarse space
+# removes them: 54 / 52 / 54 iterations, 16.7 → 12.5, 82 → 38, 330 → 134 ms per solve (one core).
+# ------------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def aggregate_nodes(indptr, indices, data):
+    """Aggregates of the matrix graph (standard aggregation, strength threshold 0): pass 1 makes
+    each node whose neighbourhood is still free the root of an aggregate holding its whole row;
+    pass 2 joins each remaining node to the pass-1 aggregate it is most strongly coupled to; pass 3
+    makes new aggregates of what is left. Returns (aggregate of each node, number of aggregates)."""
+    n = indptr.size - 1
+    agg = np.full(n, -1, np.int64)
+    nc = 0
+    for i in range(n):
+        if agg[i] >= 0:
+            continue
+        free = True
+        for q in range(indptr[i], indptr[i + 1]):
+            if agg[indices[q]] >= 0:
+                free = False
+                break
+        if not free:
+            continue
+        for q in range(indptr[i], indptr[i + 1]):
+            agg[indices[q]] = nc
+        agg[i] = nc
+        nc += 1
+    first = agg.copy()
+    for i in range(n):
+        if first[i] >= 0:
+            continue
+        best = -1
+        strongest = 0.0
+        for q in range(indptr[i], indptr[i + 1]):
+            j = indices[q]
+            if j != i and first[j] >= 0 and abs(data[q]) > strongest:
+                strongest = abs(data[q])
+                best = first[j]
+        agg[i] = best
+    for i in range(n):
+        if agg[i] < 0:
+            agg[i] = nc
+            for q in range(indptr[i], indptr[i + 1]):
+                if agg[indices[q]] < 0:
+                    agg[indices[q]] = nc
+            nc += 1
+    return agg, nc
+
+
+@njit(cache=True)
+def coarse_matrix(indptr, indices, data, agg, nc):
+    """A_c = Pᵀ A P (dense) for the piecewise-constant prolongation of the aggregates ``agg``."""
+    ac = np.zeros((nc, nc))
+    for i in range(indptr.size - 1):
+        ai = agg[i]
+        for q in range(indptr[i], indptr[i + 1]):
+            ac[ai, agg[indices[q]]] += data[q]
+    return ac
+
+
+@njit(cache=True)
+def _two_level_apply(lc, lct, agg, dinv, r, z, rc, yc):
+    """z = D⁻¹ r + P A_c⁻¹ Pᵀ r with A_c = L Lᵀ (``lc`` = L, ``lct`` = Lᵀ, both C-ordered)."""
+    nc = rc.size
+    rc[:] = 0.0
+    for i in range(r.size):
+        rc[agg[i]] += r[i]
+    for i in range(nc):                  # L y = Pᵀ r
+        s = rc[i]
+        for j in range(i):
+            s -= lc[i, j] * yc[j]
+        yc[i] = s / lc[i, i]
+    for i in range(nc - 1, -1, -1):      # Lᵀ c = y
+        s = yc[i]
+        for j in range(i + 1, nc):
+            s -= lct[i, j] * rc[j]
+        rc[i] = s / lct[i, i]
+    for i in range(r.size):
+        z[i] = dinv[i] * r[i] + rc[agg[i]]
+
+
+@njit(cache=True)
+def pcg_two_level(indptr, indices, data, b, x0, rtol, atol, maxiter):
+    """Solve A x = b (SPD, CSR, diagonal first) by CG preconditioned with Jacobi plus the
+    aggregation coarse space above (set up from A on every call). Same stopping test, return
+    convention and breakdown checks as :func:`pcg_jacobi`; a coarse matrix that is not positive
+    definite (A not SPD) returns ``BREAKDOWN``. Dot products through :func:`_dot`."""
+    n = b.size
+    x, r, dinv, thresh, zero, status = _start(indptr, indices, data, _diag_first(indptr, indices, data), b, x0,
+                                              rtol, atol)
+    if zero:
+        return x, 0, 0
+    if status != 0:
+        return x, 0, status
+    agg, nc = aggregate_nodes(indptr, indices, data)
+    ac = coarse_matrix(indptr, indices, data, agg, nc)
+    for i in range(nc):                  # Cholesky needs a positive diagonal at least
+        if not ac[i, i] > 0.0:
+            return x, 0, BREAKDOWN
+    lc = np.linalg.cholesky(ac)
+    for i in range(nc):
+        if not lc[i, i] > 0.0:           # NaN pivots: A_c not positive definite
+            return x, 0, BREAKDOWN
+    lct = np.ascontiguousarray(lc.T)
+    z = np.empty(n)
+    p = np.empty(n)
+    q = np.empty(n)
+    rc = np.empty(nc)
+    yc = np.empty(nc)
+    rho_prev = 1.0
+    for it in range(maxiter):
+        if math.sqrt(_dot(r, r)) < thresh:
+            return x, it, 0
+        _two_level_apply(lc, lct, agg, dinv, r, z, rc, yc)
+        rho = _dot(r, z)
+        if not rho > 0.0:
+            return x, it, BREAKDOWN
+        if it > 0:
+            beta = rho / rho_prev
+            for i in range(n):
+                p[i] = p[i] * beta + z[i]
+        else:
+            p[:] = z
+        csr_matvec(indptr, indices, data, p, q)
+        pq = _dot(p, q)
+        if not pq > 0.0:
+            return x, it, BREAKDOWN
+        alpha = rho / pq
+        for i in range(n):
+            x[i] += alpha * p[i]
+            r[i] -= alpha * q[i]
+        rho_prev = rho
+    return x, maxiter, maxiter

@@ -30,7 +30,8 @@ from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_wor
 from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
 from .projection import adjoint_divergence, adjoint_pair_projection, wall_normal_acceleration
-from .linsolve import BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pin_blas_to_one_thread
+from .linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pcg_two_level,
+                       pin_blas_to_one_thread)
 from .neighbours import build_neighbours
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
                     reference_laplacian_sum)
@@ -433,9 +434,13 @@ class IsphSolver:
             return self._solve_amg(indptr, indices, data, rhs, guess)
         # the adjoint-pair operator (1 − ε) D Dᵀ + ε L_c is only semi-definite up to ε L_c and has
         # positive off-diagonal entries: incomplete Cholesky (modified or not) meets non-positive
-        # pivots on it (Newtonian film, ε = 0.01: every step), so it is solved by Jacobi-CG
-        dic = self.cfg.numerics.pressure_solver == "cg_dic" and self.cfg.numerics.projection != "adjoint_pair"
-        return self._solve_cg(indptr, indices, data, rhs, guess, "ppe", dic=dic)
+        # pivots on it (Newtonian film, ε = 0.01: every step); its preconditioned solver is the
+        # two-level CG (Jacobi + aggregation coarse space, iterations independent of dx)
+        solver = self.cfg.numerics.pressure_solver
+        if solver == "cg_dic" and self.cfg.numerics.projection == "adjoint_pair":
+            solver = "cg_two_level"
+        return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
+                              method={"cg_dic": "dic", "cg_two_level": "two_level"}.get(solver, "jacobi"))
 
     def _direct(self, indptr, indices, data, rhs, kind):
         """SuperLU; a singular matrix stops the run as a blow-up (partial output kept)."""
@@ -483,18 +488,21 @@ class IsphSolver:
             return self._fallback(indptr, indices, data, rhs, "ppe", why)
         return sol
 
-    def _solve_cg(self, indptr, indices, data, rhs, guess, kind, dic=False):
-        """Jacobi-preconditioned CG (numba, :mod:`.linsolve`: scipy's cg iteration bit for bit) or
-        DIC-preconditioned CG (``dic``), warm-started; SuperLU if it breaks down, raises, returns a
-        non-finite solution or does not converge in 1000 iterations."""
+    def _solve_cg(self, indptr, indices, data, rhs, guess, kind, method="jacobi"):
+        """CG, warm-started: Jacobi-preconditioned (numba, :mod:`.linsolve`: scipy's cg iteration
+        bit for bit), DIC-preconditioned (``method="dic"``) or two-level (``"two_level"``: Jacobi +
+        aggregation coarse space); SuperLU if it breaks down, raises, returns a non-finite solution
+        or does not converge in 1000 iterations."""
+        rtol = self.cfg.numerics.solver_rtol
         try:
-            if dic:
-                sol, it, info = pcg_dic(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0, 1000,
+            if method == "dic":
+                sol, it, info = pcg_dic(indptr, indices, data, rhs, guess, rtol, 0.0, 1000,
                                         self.cfg.numerics.ic_modification)
+            elif method == "two_level":
+                sol, it, info = pcg_two_level(indptr, indices, data, rhs, guess, rtol, 0.0, 1000)
             else:
-                sol, it, info = pcg_jacobi(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 0.0,
-                                           1000)
-        except (ZeroDivisionError, FloatingPointError) as exc:
+                sol, it, info = pcg_jacobi(indptr, indices, data, rhs, guess, rtol, 0.0, 1000)
+        except (ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError) as exc:
             sol, it, info = guess, 0, BREAKDOWN
             LOG.warning("isph %s: %s CG raised %r", self.cfg.case, kind, exc)
         if kind == "ppe":
