@@ -77,6 +77,12 @@ class Rheology:
     pressure_floor: str = param("half_layer", choices=("half_layer", "none"),
                                 doc="pressure seen by the friction law clipped below at rho g cos(theta) dx/2 "
                                     "(half_layer: thin fronts keep their friction) or at 0 (none)")
+    pressure_filter: str = param("none", choices=("none", "shepard", "mls"),
+                                 doc="pressure seen by the friction law (eq 5): each particle's own (none), its "
+                                     "kernel (Shepard) average over the granular neighbours (shepard), or the "
+                                     "kernel-weighted linear least-squares fit there (mls: exact for linear "
+                                     "pressures at walls and free surfaces); the filters remove the layer-to-layer "
+                                     "mode that the adjoint-pair pressure gradient barely sees")
     regularisation: str = param("none", choices=("none", "barker_gray_2017"),
                                 doc="mu(I) below the well-posed band: the paper's law (none), or the partial "
                                     "regularisation of Barker & Gray (2017, eq 6.3), well posed for every I")

@@ -71,6 +71,72 @@ def pair_kernel(rr, h):
     return w, gw
 
 
+@njit(cache=True, parallel=PARALLEL)
+def shepard_average(start, nbr, wk, nf, h, f):
+    """Kernel (Shepard) average f̄_i = (W(0) f_i + Σ_j W_ij f_j)/(W(0) + Σ_j W_ij) over the granular
+    neighbours j of each granular particle i (wall particles left out)."""
+    w0 = 7.0 / (4.0 * math.pi * h * h)
+    out = np.empty(nf)
+    for i in prange(nf):
+        s = w0 * f[i]
+        sw = w0
+        for q in range(start[i], start[i + 1]):
+            j = nbr[q]
+            if j < nf:
+                s += wk[q] * f[j]
+                sw += wk[q]
+        out[i] = s / sw
+    return out
+
+
+
+@njit(cache=True, parallel=PARALLEL)
+def mls_linear_average(start, nbr, rx, ry, wk, nf, h, f):
+    """Value at each granular particle of the kernel-weighted least-squares linear fit
+    f ≈ a + b·(x_j − x_i) over the particle and its granular neighbours (moving least squares of
+    order 1): exact for linear fields, also where the support is cut by the free surface or a wall,
+    and a low-pass filter for the rest (a layer-to-layer alternation is averaged out). Where the
+    3 × 3 moment matrix is singular to round-off (fewer than three neighbours in general position),
+    the Shepard average. ``rx, ry``: x_i − x_j of each pair."""
+    w0 = 7.0 / (4.0 * math.pi * h * h)
+    out = np.empty(nf)
+    for i in prange(nf):
+        m00 = w0
+        m01 = 0.0
+        m02 = 0.0
+        m11 = 0.0
+        m12 = 0.0
+        m22 = 0.0
+        b0 = w0 * f[i]
+        b1 = 0.0
+        b2 = 0.0
+        for q in range(start[i], start[i + 1]):
+            j = nbr[q]
+            if j >= nf:
+                continue
+            w = wk[q]
+            x = -rx[q] / h
+            y = -ry[q] / h
+            m00 += w
+            m01 += w * x
+            m02 += w * y
+            m11 += w * x * x
+            m12 += w * x * y
+            m22 += w * y * y
+            b0 += w * f[j]
+            b1 += w * f[j] * x
+            b2 += w * f[j] * y
+        # a = first component of M⁻¹ b (Cramer: cofactors of the first column)
+        c00 = m11 * m22 - m12 * m12
+        c01 = m02 * m12 - m01 * m22
+        c02 = m01 * m12 - m02 * m11
+        det = m00 * c00 + m01 * c01 + m02 * c02
+        if det > 1e-10 * m00 * m00 * m00:
+            out[i] = (c00 * b0 + c01 * b1 + c02 * b2) / det
+        else:
+            out[i] = b0 / m00
+    return out
+
 MEAN_HARMONIC, MEAN_GEOMETRIC, MEAN_ARITHMETIC, MEAN_STRESS = 0, 1, 2, 3
 MEAN_CODES = {"harmonic": MEAN_HARMONIC, "geometric": MEAN_GEOMETRIC, "arithmetic": MEAN_ARITHMETIC,
               "stress": MEAN_STRESS}

@@ -215,7 +215,13 @@ class IsphSolver:
         rh = c.rheology
         # pressure seen by the friction law (eq 5): clipped below at the overburden of half a
         # particle layer, ρ g cosθ dx/2 (free-surface and thin-front particles keep friction)
-        self.p_rheo = np.maximum(self.p, self.p_floor)
+        if rh.pressure_filter == "mls":
+            p_seen = ph.mls_linear_average(start, nbr, rx, ry, wk, nf, h, self.p)
+        elif rh.pressure_filter == "shepard":
+            p_seen = ph.shepard_average(start, nbr, wk, nf, h, self.p)
+        else:
+            p_seen = self.p
+        self.p_rheo = np.maximum(p_seen, self.p_floor)
         if rh.model == "mu_i":
             grad = ph.velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.x, self.y, self.u, self.v,
                                         lmat, self.p_rheo, self.eta, P.wnx, P.wny, P.wc, self.slip,
@@ -710,6 +716,7 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
     when due, and at an output time when SIGTERM/SIGINT asked for a stop).
     """
     out = cfg.output
+    pin_blas_to_one_thread()     # also for a solver unpickled from a checkpoint (no __init__)
     st = checkpoint.resume() if checkpoint is not None else None
     resumed = st is not None
     if st is None:
