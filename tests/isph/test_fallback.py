@@ -111,18 +111,19 @@ def test_solver_nan_rhs_falls_back_and_the_nan_then_stops_the_run(monkeypatch, t
     monkeypatch.setattr(solver_mod.ph, "assemble_ppe", planted)
     out = tmp_path / "nan.nc"
     with pytest.raises(IsphBlowUp, match="non-finite"):
-        run_isph("T22-A70", output=out, dx=0.01, t_end=0.05)
+        run_isph("T22-A70", output=out, dx=0.01, t_end=0.05, **{"numerics.projection": "approximate"})
     import xarray as xr
     ds = xr.open_dataset(out)
     assert ds.attrs["status"].startswith("failed: non-finite")
     assert ds.attrs["linear_solver_fallbacks"] == 1
 
 
+@pytest.mark.parametrize("projection, cg", [("approximate", "pcg_dic"), ("adjoint_pair", "pcg_two_level")])
 @pytest.mark.parametrize("mode", ["breakdown", "raise", "nan"])
-def test_run_survives_a_cg_failure_and_counts_it(monkeypatch, mode):
+def test_run_survives_a_cg_failure_and_counts_it(monkeypatch, mode, projection, cg):
     """The PPE CG fails once (planted: a breakdown code, a ZeroDivisionError or a NaN solution) at
     step 4: the step is solved by SuperLU and the run goes on; the output counts one fallback."""
-    real = solver_mod.pcg_dic
+    real = getattr(solver_mod, cg)
     calls = [0]
 
     def planted(*a):
@@ -135,8 +136,8 @@ def test_run_survives_a_cg_failure_and_counts_it(monkeypatch, mode):
                 return np.full_like(x, np.nan), it, 0
             return x, it, BREAKDOWN
         return real(*a)
-    monkeypatch.setattr(solver_mod, "pcg_dic", planted)
-    ds = run_isph("T22-A70", dx=0.01, t_end=0.05)
+    monkeypatch.setattr(solver_mod, cg, planted)
+    ds = run_isph("T22-A70", dx=0.01, t_end=0.05, **{"numerics.projection": projection})
     assert not ds.attrs["status"].startswith("failed")
     assert ds.attrs["linear_solver_fallbacks"] == 1
     assert ds.attrs["n_steps"] > 4 and calls[0] > 4

@@ -51,31 +51,33 @@ def test_failure_plane_angle_of_a_short_collapse(tmp_path):
     assert fp["points"] >= 3 and 25.0 < fp["angle_deg"] < 75.0
 
 
-def test_dam_break_coarse_is_stable_and_reports_its_energy():
-    # dx = 8 mm: stable to t = 1 s; the energy row is a measurement (its tolerance 0.5 % is the target)
+def test_dam_break_default_never_gains_energy_at_8_mm():
+    # the default (adjoint-pair) projection: stable to t = 1 s and within the 0.5 % energy target
     rows = v.dam_break(quick=True)
-    stable = [r for r in rows if r["quantity"].startswith("stable")][0]
-    assert stable["passed"], stable["note"]
-    energy = [r for r in rows if r["quantity"].startswith("max (E_kin")][0]
-    assert energy["value"] < 0.05
-
-
-def test_dam_break_adjoint_pair_never_gains_energy_at_8_mm():
-    rows = v.dam_break_adjoint_pair(quick=True)
-    assert {r["check"] for r in rows} == {"dam_break_adjoint_pair"}
+    assert {r["check"] for r in rows} == {"dam_break"}
     stable = [r for r in rows if r["quantity"].startswith("stable")][0]
     assert stable["passed"], stable["note"]
     energy = [r for r in rows if r["quantity"].startswith("max (E_kin")][0]
     assert energy["passed"], energy
 
 
-@pytest.mark.slow
-def test_dam_break_adjoint_pair_energy_target_at_4_and_2_mm():
-    _assert_rows(v.dam_break(quick=False, projection="adjoint_pair"))
+def test_dam_break_approximate_rows_are_reported():
+    # the previous default, kept as an option: stable at 8 mm, its energy rise reported (no tolerance)
+    rows = v.dam_break_approximate(quick=True)
+    assert {r["check"] for r in rows} == {"dam_break_approximate"}
+    stable = [r for r in rows if r["quantity"].startswith("stable")][0]
+    assert stable["passed"], stable["note"]
+    energy = [r for r in rows if r["quantity"].startswith("max (E_kin")][0]
+    assert energy["tolerance"] == float("inf") and energy["value"] < 0.05
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 11, open: the projection's pressure creates energy in the low-"
-                                       "viscosity dam break (+6..20 % of E_ref by 0.4 s at 4 mm; 2 mm blows up)")
 def test_dam_break_energy_target_at_4_and_2_mm():
     _assert_rows(v.dam_break(quick=False))
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the approximate projection's pressure creates energy in the low-"
+                                       "viscosity dam break (+62 % of E_ref by 1 s at 4 mm; 2 mm blows up)")
+def test_dam_break_approximate_fails_the_energy_target_at_4_and_2_mm():
+    _assert_rows(v.dam_break(quick=False, projection="approximate"))

@@ -56,10 +56,10 @@ ONE_LINE_REFUSALS = [
     ("convergence: {dx: [0.2, 0.01]}\n", "convergence.dx[0]: convergence isph run dx = 0.2: numerics.dx: must be"),
     ("isph: {set: {numerics.projection: exact}}\n",
      "isph.set.numerics.projection: isph run 'T10-A35': numerics.projection: must be one of"),
-    ("isph: {set: {wall.coulomb_normal: projection}}\n",
+    ("isph: {set: {numerics.projection: approximate, wall.coulomb_normal: projection}}\n",
      "isph.set.wall.coulomb_normal: isph run 'T10-A35': wall.coulomb_normal: projection needs"),
 ]
-ISPH_SET = "isph: {set: {numerics.projection: adjoint_pair, wall.coulomb_normal: projection}}\n"
+ISPH_SET = "isph: {set: {numerics.projection: approximate, wall.coulomb_normal: contact}}\n"
 YAML_1_2 = "isph: {dx: 5e-3}\n"
 NO_2D_REFERENCE = {"da": {"cases": ["1D-A70", "1D-A99"]}}
 
@@ -203,7 +203,7 @@ def test_isph_set_reaches_every_2d_run(workdir):
     path = overlay(ISPH_SET)
     rc, out, jobs = dry_run(workdir, "-j2", "results/isph/T22-A70.nc", "--configfile", str(path))
     assert rc == 0, out
-    assert "--set numerics.projection=adjoint_pair --set wall.coulomb_normal=projection" in out, out
+    assert "--set numerics.projection=approximate --set wall.coulomb_normal=contact" in out, out
 
 
 def test_dry_run_reads_yaml_1_2_numbers(workdir):

@@ -113,12 +113,13 @@ class Wall:
     cover_offset: float = param(0.5, gt=0.0, le=2.0, unit="dx",
                                 doc="a particle is not in wall contact when another lies below it within "
                                     "this tangential offset (in dx)")
-    coulomb_normal: str = param("contact", choices=("contact", "projection"),
+    coulomb_normal: str = param("auto", choices=("auto", "contact", "projection"),
                                 doc="normal stress of the Coulomb friction (slip = coulomb): the contact "
                                     "pressure of the first particle layer (PPE pressure or column weight, "
                                     "on the bed length each contact particle carries), or the walls' normal "
                                     "reaction on each particle from the previous projection (needs "
-                                    "numerics.projection: adjoint_pair, whose walls carry pressure)")
+                                    "numerics.projection: adjoint_pair, whose walls carry pressure); auto: "
+                                    "projection with adjoint_pair, contact with the approximate projection")
     layers: int = param(0, ge=0, le=8, doc="wall particle layers; 0 = enough to cover the kernel support 2h")
 
 
@@ -145,7 +146,7 @@ class Numerics:
                                 doc="divergence of the PPE source: the renormalised divergence (exact for linear "
                                     "fields), or the negative adjoint of the corrector's pressure gradient "
                                     "(energy-consistent projection, isph/projection.py)")
-    projection: str = param("approximate", choices=("approximate", "adjoint_pair"),
+    projection: str = param("adjoint_pair", choices=("approximate", "adjoint_pair"),
                             doc="pressure projection: the approximate projection (compact-Laplacian PPE, "
                                 "renormalised difference gradient, mirror-pressure walls), or the adjoint pair "
                                 "(corrector gradient G = -D^T of the renormalised divergence D, PPE "
@@ -228,7 +229,7 @@ class IsphConfig:
                 raise ConfigError(f"geometry.theta_deg: must be < {key} = {phi} for a column on a bed "
                                   f"(no rest is possible on a slope steeper than the friction angle; "
                                   f"got {g.theta_deg})")
-        if self.wall.coulomb_normal == "projection" and n.projection != "adjoint_pair":
+        if self.wall.coulomb_normal == "projection" and n.projection != "adjoint_pair":  # auto: never
             raise ConfigError("wall.coulomb_normal: projection needs numerics.projection: adjoint_pair (walls "
                               f"carrying pressure; got numerics.projection: {n.projection})")
         if g.L0 < 2 * n.dx or g.H0 < 2 * n.dx:

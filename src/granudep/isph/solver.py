@@ -95,6 +95,10 @@ class IsphSolver:
         pin_blas_to_one_thread()
         self.cfg = cfg
         c = cfg
+        # Coulomb friction from the walls' normal reaction (wall.coulomb_normal: projection, or auto
+        # with the adjoint-pair projection, whose walls carry pressure)
+        self.reaction_friction = (c.wall.coulomb_normal == "projection" or
+                                  (c.wall.coulomb_normal == "auto" and c.numerics.projection == "adjoint_pair"))
         if c.numerics.pressure_solver.startswith("amg_"):
             from .amg import have_pyamg
             if not have_pyamg():
@@ -245,7 +249,7 @@ class IsphSolver:
         if self.slip == ph.SLIP_COULOMB:
             diag_u = data[indptr[:-1]].copy()
             wall_du, wall_dv = diag_u.copy(), diag_v.copy()
-            if c.wall.coulomb_normal == "projection":
+            if self.reaction_friction:
                 if self.wall_an is None or self.wall_an.shape[0] != nf:
                     self.wall_an = np.zeros((nf, self.planes.shape[0]))
                 ph.coulomb_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, self.mu_wall, dt,
@@ -379,7 +383,7 @@ class IsphSolver:
         self.stats.walls_released += released
         self.p = p[:nf]
         self.p_wall = p[nf:]
-        if c.wall.coulomb_normal == "projection":
+        if self.reaction_friction:
             self.wall_an = wall_normal_acceleration(start, nbr, rx, ry, gw, nf, self.vol, lmat_p, self.parts.wnx,
                                                     self.parts.wny, p, self.rho, self.planes)
         self.u = us - dt / self.rho * gpx

@@ -190,21 +190,22 @@ def dam_break_config(dx: float, slip: str = "free_slip", t_end: float = 1.0, **n
             "output": {"progress_s": 1e9, "interval": 0.01, "stop_at_rest": False}}
 
 
-def dam_break(quick: bool = False, projection: str = "approximate", resolutions=None) -> list[dict]:
+def dam_break(quick: bool = False, projection: str | None = None, resolutions=None,
+              tolerance: float = 0.005) -> list[dict]:
     """Water dam break (Newtonian, low viscosity): every SPH code is expected to run it. Rows per dx:
     stable to t = 1 s (no blow-up), the largest rise of E_kin + E_pot + dissipated above E_0 (tolerance
     0.5 % of E_ref = m g Σ y(0)), and the surge front speed over t = 0.1..0.3 s against Ritter's
     2 sqrt(g H) (the inviscid shallow-water value; reported: real surges are slower, and the
     dam-break measurements themselves are not in this repository). ``projection``: the
-    ``numerics.projection`` under test (the check name carries it unless it is the default)."""
+    ``numerics.projection`` under test (None: the default; the check name carries any other)."""
     from .solver import IsphBlowUp, run
     from ..progress import Progress
     rows = []
-    name = "dam_break" if projection == "approximate" else f"dam_break_{projection}"
+    name = "dam_break" if projection is None else f"dam_break_{projection}"
     if resolutions is None:
         resolutions = (0.008,) if quick else (0.004, 0.002)
     for dx in resolutions:
-        cfg = load_config(dam_break_config(dx, projection=projection))
+        cfg = load_config(dam_break_config(dx, **({} if projection is None else {"projection": projection})))
         try:
             s, snaps, status, _ = run(cfg, progress=Progress(1e9))
             stable = True
@@ -223,7 +224,7 @@ def dam_break(quick: bool = False, projection: str = "approximate", resolutions=
         rows += [
             _row(name, f"stable to t = 1 s, dx = {dx * 1e3:g} mm (1 = yes)", float(stable), 1.0,
                  0.0 if stable else 1.0, 0.0, f"reached t = {s.t:.3f} s, step {s.step_no}; {status[:160]}"),
-            _row(name, f"max (E_kin + E_pot + D - E_0)/E_ref, dx = {dx * 1e3:g} mm", excess, 0.0, excess, 0.005,
+            _row(name, f"max (E_kin + E_pot + D - E_0)/E_ref, dx = {dx * 1e3:g} mm", excess, 0.0, excess, tolerance,
                  f"at t = {float(t[int(np.argmax(resid))]):.3f} s; pressure work {eb.projection / eb.e_ref:+.3f}, "
                  f"shifting {eb.shifting / eb.e_ref:+.3f} of E_ref at the end"),
             _row(name, f"front speed t = 0.1..0.3 s / 2 sqrt(g H), dx = {dx * 1e3:g} mm", speed / ritter, 1.0,
@@ -232,16 +233,18 @@ def dam_break(quick: bool = False, projection: str = "approximate", resolutions=
     return rows
 
 
-def dam_break_adjoint_pair(quick: bool = False) -> list[dict]:
-    """The dam break with the energy-stable adjoint-pair projection (``numerics.projection:
-    adjoint_pair``, isph/projection.py), at 8 mm (quick) or 4 mm; the 2 mm run is in
-    docs/paper-notes.md (it takes ~6 min)."""
-    return dam_break(quick, projection="adjoint_pair", resolutions=(0.008,) if quick else (0.004,))
+def dam_break_approximate(quick: bool = False) -> list[dict]:
+    """The dam break with the approximate projection (``numerics.projection: approximate``, the
+    default before session 7), reported (no tolerance on the energy; its stability row still counts):
+    its pressure creates energy (+62 % of E_ref by t = 1 s at 4 mm; 2 mm blows up), which is why it
+    is no longer the default (docs/paper-notes.md). 8 mm (quick) or 4 mm."""
+    return dam_break(quick, projection="approximate", resolutions=(0.008,) if quick else (0.004,),
+                     tolerance=math.inf)
 
 
 def run_all(quick: bool = False) -> pd.DataFrame:
     rows = []
-    for check in (hydrostatic, film_flow, sliding_block, bagnold, dam_break, dam_break_adjoint_pair,
+    for check in (hydrostatic, film_flow, sliding_block, bagnold, dam_break, dam_break_approximate,
                   collapse_t22a70):
         rows += check(quick)
     return pd.DataFrame(rows, columns=COLUMNS)
