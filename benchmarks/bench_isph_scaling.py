@@ -7,6 +7,7 @@ the fitted exponent of cost/step vs N; the peak RSS; optionally T22-A70 to rest 
 
 Run (one command per figure set):
   NUMBA_NUM_THREADS=1 python benchmarks/bench_isph_scaling.py [--dx 4,2,1] [--steps 50] [--solvers cg_dic,amg_sa]
+      [--set numerics.projection=adjoint_pair --set wall.coulomb_normal=projection]   (the candidate)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py ...
   python benchmarks/bench_isph_scaling.py --threads 1,2      (one subprocess per thread count, interleaved)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py --to-rest 2,1   (T22-A70 to rest, wall time)
@@ -122,11 +123,15 @@ def checkpoint(case: str, dx: float, t_flow: float):
     return s
 
 
+#: scheme options of the timed steps (``--set KEY=VALUE``), e.g. numerics.projection=adjoint_pair
+SETS: dict = {}
+
+
 def _restart(s, solver: str):
-    """The checkpointed solver with another PPE solver (same state)."""
-    import dataclasses
-    c = s.cfg
-    s.cfg = dataclasses.replace(c, numerics=dataclasses.replace(c.numerics, pressure_solver=solver))
+    """The checkpointed solver (default numerics) with another PPE solver and the ``--set`` scheme
+    options (same state: a developed flow of the default scheme)."""
+    from granudep.isph.config import load_config
+    s.cfg = load_config(s.cfg, **{"numerics.pressure_solver": solver, **SETS})
     s.stats.__init__()
     return s
 
@@ -216,7 +221,11 @@ def main() -> None:
     ap.add_argument("--solvers", default="cg_dic", help="comma-separated numerics.pressure_solver values")
     ap.add_argument("--threads", default=None, help="e.g. 1,2: rerun this command once per NUMBA_NUM_THREADS")
     ap.add_argument("--to-rest", default=None, help="e.g. 2,1: T22-A70 to rest at these dx (mm)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="scheme option of the timed steps (repeatable), e.g. numerics.projection=adjoint_pair")
     args = ap.parse_args()
+    from granudep.cliutil import parse_sets
+    SETS.update(parse_sets(args.set))
     if args.threads:
         argv, skip = [], False
         for a in sys.argv[1:]:
