@@ -7,7 +7,7 @@ the fitted exponent of cost/step vs N; the peak RSS; optionally T22-A70 to rest 
 
 Run (one command per figure set):
   NUMBA_NUM_THREADS=1 python benchmarks/bench_isph_scaling.py [--dx 4,2,1] [--steps 50] [--solvers cg_dic,amg_sa]
-      [--set numerics.projection=adjoint_pair --set wall.coulomb_normal=projection]   (the candidate)
+      [--set numerics.projection=approximate]   (scheme options of the timed steps; default: adjoint pair)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py ...
   python benchmarks/bench_isph_scaling.py --threads 1,2      (one subprocess per thread count, interleaved)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py --to-rest 2,1   (T22-A70 to rest, wall time)
@@ -123,7 +123,7 @@ def checkpoint(case: str, dx: float, t_flow: float):
     return s
 
 
-#: scheme options of the timed steps (``--set KEY=VALUE``), e.g. numerics.projection=adjoint_pair
+#: scheme options of the timed steps (``--set KEY=VALUE``), e.g. numerics.projection=approximate
 SETS: dict = {}
 
 
@@ -222,7 +222,7 @@ def main() -> None:
     ap.add_argument("--threads", default=None, help="e.g. 1,2: rerun this command once per NUMBA_NUM_THREADS")
     ap.add_argument("--to-rest", default=None, help="e.g. 2,1: T22-A70 to rest at these dx (mm)")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                    help="scheme option of the timed steps (repeatable), e.g. numerics.projection=adjoint_pair")
+                    help="scheme option of the timed steps (repeatable), e.g. numerics.projection=approximate")
     args = ap.parse_args()
     from granudep.cliutil import parse_sets
     SETS.update(parse_sets(args.set))
