@@ -8,9 +8,12 @@ numba kernels of :mod:`granudep.isph.physics`:
 2. rheology from uⁿ, pⁿ: η = μ(I) p/|γ̇| capped at η_max (or Newtonian η);
 3. predictor, implicit in the viscous stress: (I − Δt/ρ ∇·η∇) u* = uⁿ + Δt g (one sparse matrix,
    two right-hand sides), g = (g sin θ, −g cos θ);
-4. PPE Σ a_ij (p_i − p_j) = −ρ/Δt ∇·u* (+ density-invariant source), p = 0 on the free surface,
-   mirror-pressure Neumann condition on walls;
-5. corrector uⁿ⁺¹ = u* − Δt/ρ ∇p; positions xⁿ⁺¹ = xⁿ + Δt uⁿ⁺¹ + δr (particle shifting).
+4. projection (default ``numerics.projection: adjoint_pair``, :mod:`.projection`): PPE
+   ((1 − ε) D Dᵀ + ε L_c) p = −ρ/Δt D u* (+ density-invariant source) over the granular and the
+   wetted wall nodes, Dirichlet p_fs on the free surface, solved by two-level CG; corrector
+   uⁿ⁺¹ = u* + Δt/ρ Dᵀ p, energy-stable. ``approximate`` (before session 7): compact PPE
+   Σ a_ij (p_i − p_j) = −ρ/Δt ∇·u*, mirror-pressure Neumann walls, renormalised difference gradient;
+5. positions xⁿ⁺¹ = xⁿ + Δt uⁿ⁺¹ + δr (particle shifting).
 """
 from __future__ import annotations
 
