@@ -28,6 +28,16 @@ def _small_dataset():
 
 def test_sigint_during_a_write_is_delivered_after_it(tmp_path):
     out = tmp_path / "f.txt"
+    # a process started in the background of a non-interactive shell inherits SIGINT ignored
+    # (POSIX), and Python then leaves it so: give the test Python's own Ctrl-C handler
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _sigint_during_a_write(out, tmp_path)
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+def _sigint_during_a_write(out, tmp_path):
 
     def write(tmp: Path):
         with open(tmp, "w") as fh:
