@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from pathlib import Path
 
 from ._version import __version__
 from .config import ConfigError
@@ -44,9 +45,23 @@ def _cmd_warmup(args) -> int:
 def _cmd_verify(args) -> int:
     """Run a stage's analytic verification suite and write the table (CSV) the report reads."""
     from .io import check_output, write_text
+    import pandas as pd
     check_output(args.output, suffixes=(".csv",))  # before the suite runs
     module = importlib.import_module(f"granudep.{args.stage}.verification")
-    table = module.run_all(quick=args.quick)
+    known = list(getattr(module, "CHECKS", {}))
+    if args.checks is not None:
+        if not known:
+            raise ConfigError(f"--checks: the {args.stage} suite runs as a whole (no --checks)")
+        bad = [c for c in args.checks.split(",") if c not in known]
+        if bad or not args.checks:
+            raise ConfigError(f"--checks: must be comma-separated names of {', '.join(known)} (got {args.checks!r})")
+    if args.merge:
+        missing = [f for f in args.merge if not Path(f).is_file()]
+        if missing:
+            raise ConfigError(f"--merge: file not found: {missing[0]}")
+        table = pd.concat([pd.read_csv(f) for f in args.merge], ignore_index=True)  # in the order given
+    else:
+        table = module.run_all(quick=args.quick, **({"checks": args.checks.split(",")} if args.checks else {}))
     print(table.to_string(index=False))
     write_text(table.to_csv(index=False), args.output)
     failed = int((~table["passed"].astype(bool)).sum())
@@ -79,6 +94,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("stage", choices=["da", "isph"])
     p.add_argument("-o", "--output", required=True, help="CSV: check, quantity, value, reference, error, tolerance, passed, note")
     p.add_argument("--quick", action="store_true", help="coarser resolutions (CI smoke)")
+    p.add_argument("--checks", default=None, metavar="NAME[,NAME]", help="run only these checks (isph: "
+                   "hydrostatic, film_flow, sliding_block, bagnold, dam_break, dam_break_approximate, collapse_t22a70)")
+    p.add_argument("--merge", nargs="+", default=None, metavar="CSV",
+                   help="write the table of these partial tables (--checks runs, concatenated in this order) "
+                        "instead of running checks")
     p.set_defaults(func=_cmd_verify)
     for name in STAGES:
         try:

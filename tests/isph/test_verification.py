@@ -81,3 +81,25 @@ def test_dam_break_energy_target_at_4_and_2_mm():
                                        "viscosity dam break (+62 % of E_ref by 1 s at 4 mm; 2 mm blows up)")
 def test_dam_break_approximate_fails_the_energy_target_at_4_and_2_mm():
     _assert_rows(v.dam_break(quick=False, projection="approximate"))
+
+
+def test_cli_runs_parts_of_the_suite_and_merges_them_in_order(tmp_path, capsys):
+    from granudep.cli import main
+    a, b, out = tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "isph.csv"
+    assert main(["verify", "isph", "--quick", "--checks", "sliding_block", "-o", str(a)]) == 0
+    assert main(["verify", "isph", "--quick", "--checks", "hydrostatic", "-o", str(b)]) == 0
+    assert main(["verify", "isph", "--merge", str(b), str(a), "-o", str(out)]) == 0
+    import pandas as pd
+    table = pd.read_csv(out)
+    assert list(table["check"]) == ["hydrostatic", "hydrostatic", "coulomb_sliding_block"]
+    assert table.equals(pd.concat([pd.read_csv(b), pd.read_csv(a)], ignore_index=True))
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--checks", "bogus"], "--checks: must be comma-separated names of hydrostatic"),
+    (["--merge", "nope.csv"], "--merge: file not found: nope.csv"),
+])
+def test_cli_refuses_unknown_checks_and_missing_parts(tmp_path, capsys, argv, message):
+    from granudep.cli import main
+    assert main(["verify", "isph", *argv, "-o", str(tmp_path / "x.csv")]) == 2
+    assert message in capsys.readouterr().err
