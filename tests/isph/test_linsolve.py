@@ -14,7 +14,7 @@ from granudep.isph.linsolve import (BREAKDOWN, NONFINITE, _two_level_apply, aggr
 from granudep.isph.neighbours import build_neighbours
 
 
-def _particle_matrix(n_side=24, shift=0.05, seed=0, diag_extra=None):
+def _particle_matrix(n_side=24, shift=0.05, seed=0, diag_extra=None, radius=2.6, random_shift=True):
     """CSR like the ISPH kernels write it: per row the diagonal first, then the neighbours in
     neighbour-list order (unsorted); off-diagonal -w_ij (w > 0, symmetric), diagonal
     shift + Σ w (+ diag_extra: a second diagonal for the pair solve)."""
@@ -22,8 +22,8 @@ def _particle_matrix(n_side=24, shift=0.05, seed=0, diag_extra=None):
     g = np.arange(n_side) * 1.0
     x, y = (a.ravel() + 0.2 * rng.standard_normal(n_side * n_side) for a in np.meshgrid(g, g))
     n = x.size
-    start, nbr, rx, ry, rr = build_neighbours(x, y, n, 2.6, 0.0)
-    w = (1.0 - rr / 2.6) ** 4  # symmetric: a function of the pair distance
+    start, nbr, rx, ry, rr = build_neighbours(x, y, n, radius, 0.0)
+    w = (1.0 - rr / radius) ** 4  # symmetric: a function of the pair distance
     indptr = np.zeros(n + 1, np.int64)
     indptr[1:] = np.cumsum(np.diff(start) + 1)
     indices = np.empty(indptr[-1], np.int64)
@@ -33,7 +33,7 @@ def _particle_matrix(n_side=24, shift=0.05, seed=0, diag_extra=None):
         indices[indptr[i]] = i
         indices[indptr[i] + 1:indptr[i + 1]] = nbr[a:b]
         data[indptr[i] + 1:indptr[i + 1]] = -w[a:b]
-        data[indptr[i]] = shift * (1.0 + rng.random()) + w[a:b].sum()
+        data[indptr[i]] = (shift * (1.0 + rng.random()) if random_shift else shift) + w[a:b].sum()
     return indptr, indices, data
 
 
@@ -314,23 +314,7 @@ def test_dot_is_blas_up_to_10000_then_a_fixed_order_sum():
 
 def _wide_matrix(n_side=40, shift=1e-3, seed=3):
     """A 2-ring-like SPD particle matrix (support 5.2 spacings, as the adjoint-pair PPE's D Dᵀ)."""
-    rng = np.random.default_rng(seed)
-    g = np.arange(n_side) * 1.0
-    x, y = (a.ravel() + 0.2 * rng.standard_normal(n_side * n_side) for a in np.meshgrid(g, g))
-    n = x.size
-    start, nbr, rx, ry, rr = build_neighbours(x, y, n, 5.2, 0.0)
-    w = (1.0 - rr / 5.2) ** 4
-    indptr = np.zeros(n + 1, np.int64)
-    indptr[1:] = np.cumsum(np.diff(start) + 1)
-    indices = np.empty(indptr[-1], np.int64)
-    data = np.empty(indptr[-1])
-    for i in range(n):  # test set-up only
-        a, b = start[i], start[i + 1]
-        indices[indptr[i]] = i
-        indices[indptr[i] + 1:indptr[i + 1]] = nbr[a:b]
-        data[indptr[i] + 1:indptr[i + 1]] = -w[a:b]
-        data[indptr[i]] = shift + w[a:b].sum()
-    return indptr, indices, data
+    return _particle_matrix(n_side, shift, seed, radius=5.2, random_shift=False)
 
 
 def test_aggregates_cover_every_node_once_and_are_connected():

@@ -159,25 +159,43 @@ def _diag_first(indptr, indices, data):
 @njit(cache=True)
 def pcg_jacobi(indptr, indices, data, b, x0, rtol, atol, maxiter):
     """Solve A x = b (A symmetric positive definite, CSR, diagonal stored first in each row)."""
-    n = b.size
     x, r, dinv, thresh, zero, status = _start(indptr, indices, data, _diag_first(indptr, indices, data), b, x0,
                                               rtol, atol)
     if zero:
         return x, 0, 0
     if status != 0:
         return x, 0, status
+    no_coarse = np.empty((0, 0))
+    return _pcg_loop(indptr, indices, data, x, r, dinv, thresh, maxiter, no_coarse, no_coarse,
+                     np.empty(0, np.int64), True)
+
+
+@njit(cache=True)
+def _pcg_loop(indptr, indices, data, x, r, dinv, thresh, maxiter, lc, lct, agg, blas_dot):
+    """The CG iteration from the initial state (x, r): preconditioner z = D⁻¹ r, plus the coarse
+    correction P A_c⁻¹ Pᵀ r when ``lc`` (the Cholesky factor of A_c, :func:`pcg_two_level`) is not
+    empty; dot products by ``np.dot`` (``blas_dot``: scipy's iterates bit for bit) or :func:`_dot`.
+    Returns (x, iterations, info) as :func:`pcg_jacobi`."""
+    n = x.size
+    nc = lc.shape[0]
     z = np.empty(n)
     p = np.empty(n)
     q = np.empty(n)
+    rc = np.empty(nc)
+    yc = np.empty(nc)
     rho_prev = 1.0
     for it in range(maxiter):
-        if math.sqrt(np.dot(r, r)) < thresh:
+        rr = np.dot(r, r) if blas_dot else _dot(r, r)
+        if math.sqrt(rr) < thresh:
             return x, it, 0
-        for i in range(n):
-            z[i] = dinv[i] * r[i]
-        rho = np.dot(r, z)
+        if nc > 0:
+            _two_level_apply(lc, lct, agg, dinv, r, z, rc, yc)
+        else:
+            for i in range(n):
+                z[i] = dinv[i] * r[i]
+        rho = np.dot(r, z) if blas_dot else _dot(r, z)
         if not rho > 0.0:
-            return x, it, BREAKDOWN  # r·D⁻¹r <= 0 (or NaN): D not positive
+            return x, it, BREAKDOWN  # r·M⁻¹r <= 0 (or NaN): the preconditioner not positive
         if it > 0:
             beta = rho / rho_prev
             for i in range(n):
@@ -185,7 +203,7 @@ def pcg_jacobi(indptr, indices, data, b, x0, rtol, atol, maxiter):
         else:
             p[:] = z
         csr_matvec(indptr, indices, data, p, q)
-        pq = np.dot(p, q)
+        pq = np.dot(p, q) if blas_dot else _dot(p, q)
         if not pq > 0.0:
             return x, it, BREAKDOWN  # zero/negative curvature: A singular or indefinite
         alpha = rho / pq
@@ -893,7 +911,6 @@ def pcg_two_level(indptr, indices, data, b, x0, rtol, atol, maxiter):
     aggregation coarse space above (set up from A on every call). Same stopping test, return
     convention and breakdown checks as :func:`pcg_jacobi`; a coarse matrix that is not positive
     definite (A not SPD) returns ``BREAKDOWN``. Dot products through :func:`_dot`."""
-    n = b.size
     x, r, dinv, thresh, zero, status = _start(indptr, indices, data, _diag_first(indptr, indices, data), b, x0,
                                               rtol, atol)
     if zero:
@@ -909,33 +926,5 @@ def pcg_two_level(indptr, indices, data, b, x0, rtol, atol, maxiter):
     for i in range(nc):
         if not lc[i, i] > 0.0:           # NaN pivots: A_c not positive definite
             return x, 0, BREAKDOWN
-    lct = np.ascontiguousarray(lc.T)
-    z = np.empty(n)
-    p = np.empty(n)
-    q = np.empty(n)
-    rc = np.empty(nc)
-    yc = np.empty(nc)
-    rho_prev = 1.0
-    for it in range(maxiter):
-        if math.sqrt(_dot(r, r)) < thresh:
-            return x, it, 0
-        _two_level_apply(lc, lct, agg, dinv, r, z, rc, yc)
-        rho = _dot(r, z)
-        if not rho > 0.0:
-            return x, it, BREAKDOWN
-        if it > 0:
-            beta = rho / rho_prev
-            for i in range(n):
-                p[i] = p[i] * beta + z[i]
-        else:
-            p[:] = z
-        csr_matvec(indptr, indices, data, p, q)
-        pq = _dot(p, q)
-        if not pq > 0.0:
-            return x, it, BREAKDOWN
-        alpha = rho / pq
-        for i in range(n):
-            x[i] += alpha * p[i]
-            r[i] -= alpha * q[i]
-        rho_prev = rho
-    return x, maxiter, maxiter
+    return _pcg_loop(indptr, indices, data, x, r, dinv, thresh, maxiter, lc, np.ascontiguousarray(lc.T), agg,
+                     False)

@@ -98,10 +98,6 @@ class IsphSolver:
         pin_blas_to_one_thread()
         self.cfg = cfg
         c = cfg
-        # Coulomb friction from the walls' normal reaction (wall.coulomb_normal: projection, or auto
-        # with the adjoint-pair projection, whose walls carry pressure)
-        self.reaction_friction = (c.wall.coulomb_normal == "projection" or
-                                  (c.wall.coulomb_normal == "auto" and c.numerics.projection == "adjoint_pair"))
         if c.numerics.pressure_solver.startswith("amg_"):
             from .amg import have_pyamg
             if not have_pyamg():
@@ -192,6 +188,14 @@ class IsphSolver:
         self.wall_an = None                     # adjoint_pair: wall-normal reaction per particle and plane
 
     # ------------------------------------------------------------------------------------------
+    @property
+    def reaction_friction(self) -> bool:
+        """Coulomb friction from the walls' normal reaction (wall.coulomb_normal: projection, or auto
+        with the adjoint-pair projection, whose walls carry pressure); read from the config, so a
+        solver given another config (a benchmark restart) follows it."""
+        w, n = self.cfg.wall, self.cfg.numerics
+        return w.coulomb_normal == "projection" or (w.coulomb_normal == "auto" and n.projection == "adjoint_pair")
+
     def time_step(self) -> float:
         n = self.cfg.numerics
         umax = float(np.sqrt(np.max(self.u ** 2 + self.v ** 2))) if self.nf else 0.0
