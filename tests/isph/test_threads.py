@@ -21,7 +21,10 @@ for _ in range(40):
     s.dt = dt
     s.step(dt)
 np.savez(sys.argv[1], x=s.x, y=s.y, u=s.u, v=s.v, p=s.p, eta=s.eta, fs=s.fs, ids=s.ids)
-print(json.dumps({"threads": numba.get_num_threads(), "ppe": s.stats.ppe_iters, "visc": s.stats.visc_iters}))
+from granudep.isph import physics
+builds = {b: len(getattr(physics.geometry_terms, b).signatures) for b in ("serial", "parallel")}
+print(json.dumps({"threads": numba.get_num_threads(), "ppe": s.stats.ppe_iters, "visc": s.stats.visc_iters,
+                  "builds": builds}))
 """
 
 
@@ -39,8 +42,32 @@ def test_one_and_two_threads_give_the_same_run_bit_for_bit(tmp_path):
     b = _run(2, tmp_path / "t2.npz")
     assert a["threads"] == 1 and b["threads"] == 2  # NUMBA_NUM_THREADS honoured
     assert (a["ppe"], a["visc"]) == (b["ppe"], b["visc"]) and a["ppe"] > 0
+    # one thread runs the serial build (no hand-off to a worker thread per prange region), two the
+    # parallel one: the comparison below is between the two builds
+    assert a["builds"] == {"serial": 1, "parallel": 0}, a["builds"]
+    assert b["builds"] == {"serial": 0, "parallel": 1}, b["builds"]
     r1 = np.load(tmp_path / "t1.npz")
     r2 = np.load(tmp_path / "t2.npz")
     for k in r1.files:
         assert np.array_equal(r1[k], r2[k]), k
     assert np.abs(r1["u"]).max() > 0.05  # the column is collapsing: the comparison is not of a state at rest
+
+
+def test_the_two_builds_of_a_prange_kernel_keep_separate_caches_and_agree():
+    """The serial build is a renamed copy (its own cache index); both give the same numbers."""
+    from granudep.isph import physics
+    from granudep.isph.parallel import SERIAL_SUFFIX
+
+    k = physics.pair_kernel
+    assert k.serial.py_func.__qualname__ == k.py_func.__qualname__ + SERIAL_SUFFIX
+    assert k.parallel.py_func.__qualname__ == k.py_func.__qualname__
+    assert k.serial.py_func.__code__ is k.py_func.__code__
+    assert k.build(1) is k.serial and k.build(2) is k.parallel
+    rr = np.random.default_rng(3).uniform(0.0, 0.02, 500)
+    a = k.serial(rr, 0.006)
+    b = k.parallel(rr, 0.006)
+    ref = k.py_func(rr, 0.006)
+    for x, y, z in zip(a, b, ref):
+        assert np.array_equal(x, y)
+        np.testing.assert_allclose(x, z, rtol=1e-12, atol=0.0)
+    assert np.abs(a[0]).max() > 0

@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .neighbours import PARALLEL
+from .parallel import prange_kernel
 
 BREAKDOWN = -2
 NONFINITE = -3
@@ -788,7 +788,7 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
     return out[0], its[0], infos[0], out[1], its[1], infos[1]
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def pcg_dic_two(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
     """The u and v viscous systems of :func:`pcg_dic_pair` as two independent :func:`pcg_dic` solves,
     one per thread (prange over the two systems): the same results bit for bit as the pair (each

@@ -11,12 +11,7 @@ import numpy as np
 from numba import njit, prange
 
 
-# numba parallel options of the per-particle kernels: the prange loops only (numpy=False: array
-# allocations and reductions such as np.zeros or x.min() stay serial instead of each becoming a
-# parallel region of its own; every region costs a wake-up of the worker threads, and on a loaded
-# machine a wait for a time slice)
-PARALLEL = {"prange": True, "numpy": False, "comprehension": False, "setitem": False, "reduction": False,
-            "inplace_binop": False, "stencil": False, "fusion": False}
+from .parallel import PARALLEL, prange_kernel  # noqa: F401  (PARALLEL: the kernels' numba options)
 
 
 @njit(cache=True)
@@ -55,7 +50,7 @@ def _minimum_image(ddx, period, half):
     return ddx
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def build_neighbours(x, y, nf, radius, period):
     """Neighbours within ``radius`` of each of the first ``nf`` particles (self excluded).
 

@@ -25,7 +25,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..kernels import wendland_dwdr, wendland_w
-from .neighbours import PARALLEL
+from .parallel import prange_kernel
 
 SLIP_NO, SLIP_NAVIER, SLIP_FREE, SLIP_COULOMB = 0, 1, 2, 3
 SLIP_CODES = {"no_slip": SLIP_NO, "navier": SLIP_NAVIER, "free_slip": SLIP_FREE, "coulomb": SLIP_COULOMB}
@@ -50,7 +50,7 @@ def wall_beta(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
     return min(1.5, wall_beta_linear(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx))
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def pair_kernel(rr, h):
     """W(r_ij) and (dW/dr)/r (0 at r < 1e-12 h) of every pair of the neighbour list, once per step for
     all the kernels below (each evaluated them again: 0.13 ms per kernel and step at 75k pairs).
@@ -71,7 +71,7 @@ def pair_kernel(rr, h):
     return w, gw
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def shepard_average(start, nbr, wk, nf, h, f):
     """Kernel (Shepard) average f̄_i = (W(0) f_i + Σ_j W_ij f_j)/(W(0) + Σ_j W_ij) over the granular
     neighbours j of each granular particle i (wall particles left out)."""
@@ -90,7 +90,7 @@ def shepard_average(start, nbr, wk, nf, h, f):
 
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def mls_linear_average(start, nbr, rx, ry, wk, nf, h, f):
     """Value at each granular particle of the kernel-weighted least-squares linear fit
     f ≈ a + b·(x_j − x_i) over the particle and its granular neighbours (moving least squares of
@@ -161,7 +161,7 @@ def pair_viscosity(ei, ej, gi, gj, mean):
     return 0.5 * (ei + ej)
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol):
     """∇·r (free-surface detector, Lee et al. 2008), concentration C = Σ V W (self included),
     ∇C (shifting, normals) and the inverse renormalisation matrix L (Bonet & Lok 1999)."""
@@ -212,7 +212,7 @@ def geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol):
     return divr, conc, gcx, gcy, lmat, (m_xx, m_yy)
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, lmat, p, eta,
                       wnx, wny, wc, slip, slip_length, mu_wall, dx, gx, gy, rho, eta_max, wall_ns, wall_k):
     """Renormalised ∇u (rows: du/dx, du/dy, dv/dx, dv/dy); wall neighbours carry the extrapolated
@@ -271,7 +271,7 @@ def shear_rate(grad, i):
     return math.sqrt(2.0 * (dxx * dxx + dyy * dyy + 2.0 * dxy * dxy))
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
     """η = μ(I) p / |γ̇| capped to [eta_min, eta_max] (eqs 4–5); returns η and |γ̇|.
 
@@ -297,7 +297,7 @@ def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
     return eta, gdot
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, p, eta, gdot, wnx, wny, wc,
                      slip, slip_length, mu_wall, dx, dt, rho, eps2, mean, gx, gy, eta_max, lap_norm, wall_ns,
                      wall_k):
@@ -357,7 +357,7 @@ def assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, p, eta,
     return indptr, indices, data, diag_v
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def wall_contact(start, nbr, nf, x, y, planes, dx, h, cover):
     """Per particle and wall plane (n, c): distance d = n·x − c if the particle is the first layer
     over that wall (d < 2h and no granular particle between it and the wall, i.e. none with
@@ -407,7 +407,7 @@ def wall_contact(start, nbr, nf, x, y, planes, dx, h, cover):
     return dist, col
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def detached_from_walls(contact, limit):
     """Particles whose nearest wall contact (:func:`wall_contact`) is finite but farther than
     ``limit`` (numpy's min over the short axis of ``contact`` cost 0.12 ms per call)."""
@@ -421,7 +421,7 @@ def detached_from_walls(contact, limit):
     return out
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def lmat_pressure(lmat, fs, mxx, myy):
     """Renormalisation of the pressure gradient: ``lmat``, except on free-surface particles,
     where only the diagonal is renormalised (1/M_xx, 1/M_yy where both > 0.4, else none)."""
@@ -439,7 +439,7 @@ def lmat_pressure(lmat, fs, mxx, myy):
     return out
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def contact_length(start, nbr, nf, x, y, contact, planes, dx):
     """Wall length carried by each contact particle (Voronoi cell along the wall): half the distance
     to the nearest contact particle of the same wall on either side (dx/2 on a side without one
@@ -472,7 +472,7 @@ def contact_length(start, nbr, nf, x, y, contact, planes, dx):
     return length
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, dx, dt, u_eps, diag_u, diag_v,
                       length):
     """Coulomb wall friction as an implicit drag on the first particle layer (slip = coulomb).
@@ -511,7 +511,7 @@ def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, d
             diag_v[i] += dt * kd * nx * nx
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def coulomb_drag_from_reaction(nf, u, v, a_n, planes, mu_wall, dt, u_eps, diag_u, diag_v):
     """Coulomb wall friction from the walls' normal reaction (``wall.coulomb_normal: projection``):
     the tangential deceleration μ_B max(a_n, 0) u_t/|u_t| of each particle, a_n its acceleration
@@ -534,7 +534,7 @@ def coulomb_drag_from_reaction(nf, u, v, a_n, planes, mu_wall, dt, u_eps, diag_u
             diag_v[i] += dt * kd * nx * nx
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, u, v, lmat):
     """∇·u_i = tr(L_i Σ_j V (u_j − u_i) ⊗ ∇_i W_ij) over granular neighbours (walls enter through
     the pressure Neumann condition, not here). With the renormalisation L (identity where the
@@ -563,7 +563,7 @@ def divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, u, v, lmat):
     return div
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_dir, div, us, vs, conc, c0,
                  relax, wnx, wny, dt, rho, eps2, a_full, lap_norm):
     """PPE Σ_j a_ij (p_i − p_j) = −(ρ/Δt) ∇·u* − γ ρ/Δt² min(1 − C_i/C0, 0) over the unknown
@@ -628,7 +628,7 @@ def assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_d
     return indptr, indices, data, rhs
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, p, us, vs, lmat, wnx, wny, dt, rho, detached):
     """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure.
 
@@ -660,7 +660,7 @@ def pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, p, us, vs, lmat, w
     return gpx, gpy
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def smoothed_gradient(start, nbr, wk, nf, h, vol, gx, gy):
     """Kernel (Shepard) average of a granular particle field's gradient over each support: the
     surface normal of the shifting. The raw ∇C of a free-surface particle points at the nearest
@@ -686,7 +686,7 @@ def smoothed_gradient(start, nbr, wk, nf, h, vol, gx, gy):
     return sx, sy
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def surface_band(start, nbr, wk, nf, fs, h, r_ref):
     """Weight α ∈ [0, 1] of the bed-normal part of the shift that is removed (Lind et al. 2012):
     1 on free-surface particles, Σ_{j free-surface} W_ij / W(r_ref) (at most 1) below them. Below the
@@ -711,7 +711,7 @@ def surface_band(start, nbr, wk, nf, fs, h, r_ref):
     return alpha
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def shifting(nf, gcx, gcy, u, v, alpha, h, dt, coeff, dx, ncx, ncy):
     """Fickian particle shifting δr = −A h |u| Δt ∇C (Skillen et al. 2013; Lind et al. 2012);
     the fraction ``alpha`` of the part normal to the free surface is removed (1 on free-surface
@@ -747,7 +747,7 @@ def shifting(nf, gcx, gcy, u, v, alpha, h, dt, coeff, dx, ncx, ncy):
     return sx, sy
 
 
-@njit(cache=True, parallel=PARALLEL)
+@prange_kernel
 def clamp_to_walls(nf, x, y, u, v, planes, dmin, lo, hi):
     """Safeguard against wall penetration: a particle closer than ``dmin`` to a wall plane (within
     the wall's extent [lo, hi] along it) is put back at ``dmin`` and loses its velocity into the
