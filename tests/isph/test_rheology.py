@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from granudep.isph.physics import mu_i_viscosity
+from granudep.isph.viscous import mu_i_viscosity
 from granudep.isph.rheology import (friction, ill_posed_bounds, mu_extended, regularisation_constant,
                                     regularised_viscosity, well_posedness)
 

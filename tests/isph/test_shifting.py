@@ -1,7 +1,7 @@
 """Particle shifting next to the free surface (physics.surface_band, physics.shifting)."""
 import numpy as np
 
-from granudep.isph import physics as ph
+from granudep.isph import operators, shifting
 from granudep.isph import verification as v
 from granudep.isph.config import load_config
 from granudep.isph.neighbours import build_neighbours
@@ -11,8 +11,8 @@ from granudep.isph.solver import IsphSolver
 def _layer_terms(s):
     nf = s.nf
     start, nbr, rx, ry, rr = build_neighbours(s.x, s.y, nf, s.radius, s.period)
-    wk, gw = ph.pair_kernel(rr, s.h)
-    divr, conc, gcx, gcy, lmat, _ = ph.geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, s.h, s.vol)
+    wk, gw = operators.pair_kernel(rr, s.h)
+    divr, conc, gcx, gcy, lmat, _ = operators.geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, s.h, s.vol)
     fs = divr < s.cfg.numerics.free_surface_threshold
     return start, nbr, wk, gcx, gcy, fs
 
@@ -25,7 +25,7 @@ def test_surface_band_covers_the_layers_with_a_truncated_support():
     start, nbr, wk, _, _, fs = _layer_terms(s)
     layer = np.round((0.02 - dx / 2 - s.y[:s.nf]) / dx).astype(int)   # 0 = top
     assert fs[layer == 0].all() and not fs[layer > 0].any()
-    alpha = ph.surface_band(start, nbr, wk, s.nf, fs, s.h, 2.0 * dx)
+    alpha = shifting.surface_band(start, nbr, wk, s.nf, fs, s.h, 2.0 * dx)
     assert np.allclose(alpha[layer <= 2], 1.0) and np.allclose(alpha[layer >= 3], 0.0)
 
 
@@ -35,8 +35,8 @@ def test_surface_band_is_continuous_at_the_edge_of_the_support():
     for r in (2 * h - 1e-3, 2 * h - 1e-6):
         start = np.array([0, 1, 1])
         nbr = np.array([1])
-        wk, _ = ph.pair_kernel(np.array([r]), h)
-        alpha = ph.surface_band(start, nbr, wk, 2, np.array([False, True]), h, 2.0 * dx)
+        wk, _ = operators.pair_kernel(np.array([r]), h)
+        alpha = shifting.surface_band(start, nbr, wk, 2, np.array([False, True]), h, 2.0 * dx)
         assert 0.0 < alpha[0] < 1e-5
 
 
@@ -48,12 +48,12 @@ def test_shift_below_the_surface_loses_its_normal_part():
     s = IsphSolver(load_config(v.layer_config(30.0, 0.02, dx)))
     start, nbr, wk, gcx, gcy, fs = _layer_terms(s)
     s.u[:] = 1.0
-    ncx, ncy = ph.smoothed_gradient(start, nbr, wk, s.nf, s.h, s.vol, gcx, gcy)
+    ncx, ncy = operators.smoothed_gradient(start, nbr, wk, s.nf, s.h, s.vol, gcx, gcy)
     layer = np.round((0.02 - dx / 2 - s.y[:s.nf]) / dx).astype(int)
     dt = 1e-4
-    alpha = ph.surface_band(start, nbr, wk, s.nf, fs, s.h, 2.0 * dx)
-    _, sy_band = ph.shifting(s.nf, gcx, gcy, s.u, s.v, alpha, s.h, dt, 2.0, dx, ncx, ncy)
-    _, sy_surf = ph.shifting(s.nf, gcx, gcy, s.u, s.v, fs.astype(float), s.h, dt, 2.0, dx, ncx, ncy)
+    alpha = shifting.surface_band(start, nbr, wk, s.nf, fs, s.h, 2.0 * dx)
+    _, sy_band = shifting.shifting(s.nf, gcx, gcy, s.u, s.v, alpha, s.h, dt, 2.0, dx, ncx, ncy)
+    _, sy_surf = shifting.shifting(s.nf, gcx, gcy, s.u, s.v, fs.astype(float), s.h, dt, 2.0, dx, ncx, ncy)
     below = layer == 1
     assert np.all(sy_surf[below] > 1e-3 * dx)          # pushed up into the surface layer
     assert np.abs(sy_band[below]).max() < 1e-9 * dx

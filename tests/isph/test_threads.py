@@ -21,8 +21,8 @@ for _ in range(40):
     s.dt = dt
     s.step(dt)
 np.savez(sys.argv[1], x=s.x, y=s.y, u=s.u, v=s.v, p=s.p, eta=s.eta, fs=s.fs, ids=s.ids)
-from granudep.isph import physics
-builds = {b: len(getattr(physics.geometry_terms, b).signatures) for b in ("serial", "parallel")}
+from granudep.isph import operators
+builds = {b: len(getattr(operators.geometry_terms, b).signatures) for b in ("serial", "parallel")}
 print(json.dumps({"threads": numba.get_num_threads(), "ppe": s.stats.ppe_iters, "visc": s.stats.visc_iters,
                   "builds": builds}))
 """
@@ -55,10 +55,10 @@ def test_one_and_two_threads_give_the_same_run_bit_for_bit(tmp_path):
 
 def test_the_two_builds_of_a_prange_kernel_keep_separate_caches_and_agree():
     """The serial build is a renamed copy (its own cache index); both give the same numbers."""
-    from granudep.isph import physics
+    from granudep.isph import operators
     from granudep.isph.parallel import SERIAL_SUFFIX
 
-    k = physics.pair_kernel
+    k = operators.pair_kernel
     assert k.serial.py_func.__qualname__ == k.py_func.__qualname__ + SERIAL_SUFFIX
     assert k.parallel.py_func.__qualname__ == k.py_func.__qualname__
     assert k.serial.py_func.__code__ is k.py_func.__code__

@@ -109,7 +109,6 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
         "first_outflow_time": float(np.nanmin(out_t)) if np.isfinite(out_t).any() else float("nan"),
         "last_outflow_time": float(np.nanmax(out_t)) if np.isfinite(out_t).any() else float("nan"),
         "wall_time_s": float(st.wall_s), "wall_clamps": int(st.clamped),
-        "linear_solver_fallbacks": int(st.fallbacks),
         "ppe_iterations": int(st.ppe_iters), "viscous_iterations": int(st.visc_iters),
         "final_area_ratio": float(snaps.area[-1]) if snaps.area else float("nan"),
         "ms_per_step": float(1e3 * st.wall_s / st.steps) if st.steps else float("nan"),

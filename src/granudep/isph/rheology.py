@@ -17,7 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .physics import shear_rate
+from .operators import shear_rate
 
 
 def mu_extended(i: np.ndarray | float, mu_s: float, mu_2: float, mu_inf: float, i0: float):
@@ -81,7 +81,7 @@ def friction(inertial, mu_s, mu_2, mu_inf, i0, i_n1, alpha, a_minus):
 @njit(cache=True)
 def regularised_viscosity(grad, p, d, rho_s, mu_s, mu_2, mu_inf, i0, i_n1, alpha, a_minus, eta_min, eta_max):
     """η = μ(I) p/|γ̇| with μ(I) from :func:`friction`, capped to [eta_min, eta_max]; returns η, |γ̇|
-    (|γ̇| from :func:`granudep.isph.physics.shear_rate`, as in ``mu_i_viscosity``)."""
+    (|γ̇| from :func:`granudep.isph.operators.shear_rate`, as in ``mu_i_viscosity``)."""
     n = p.size
     eta = np.empty(n)
     gdot = np.empty(n)

@@ -1,7 +1,9 @@
 """Projection ISPH driver: owns the particle state, the time loop, the linear solves and output.
 
 One step (Cummins & Rudman 1999; Shao & Lo 2003; Lind et al. 2012), all per-particle work in the
-numba kernels of :mod:`granudep.isph.physics`:
+numba kernels of :mod:`granudep.isph.operators`, :mod:`~granudep.isph.walls`,
+:mod:`~granudep.isph.viscous`, :mod:`~granudep.isph.ppe`, :mod:`~granudep.isph.shifting`,
+:mod:`~granudep.isph.projection`:
 
 1. neighbour list (cell-linked, rebuilt every step), ∇·r, concentration, renormalisation;
    free-surface particles: ∇·r < ``free_surface_threshold``;
@@ -28,7 +30,7 @@ import scipy.sparse.linalg as spla
 from ..cases import G
 from ..front import FRONT_MEASURE_DOC, front_from_profile, front_measures
 from ..progress import LOG, Progress
-from . import physics as ph
+from . import operators, ppe, shifting, viscous, walls
 from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_work, viscous_dissipation
 from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
@@ -134,8 +136,8 @@ class IsphSolver:
         self.lap_norm, self.wall_ns, self.wall_k = lc["lap"], lc["wall_ns"], lc["wall_k"]
         self.a_full = (reference_laplacian_sum(self.h, self.dx, self.eps2) / self.lap_norm
                        if c.numerics.kernel_completion else 0.0)
-        self.slip = ph.SLIP_CODES[c.wall.slip]
-        self.mean = ph.MEAN_CODES[c.rheology.pair_mean]
+        self.slip = walls.SLIP_CODES[c.wall.slip]
+        self.mean = viscous.MEAN_CODES[c.rheology.pair_mean]
         planes = [(0.0, 1.0, 0.0)] + ([(1.0, 0.0, 0.0)] if c.geometry.back_wall else [])
         self.planes = np.array(planes, dtype=float)
         # extent of each wall along its tangent t = (-n_y, n_x): bed x in [0, L], back wall y >= 0
@@ -217,56 +219,56 @@ class IsphSolver:
         start, nbr, rx, ry, rr = build_neighbours(self.x, self.y, nf, self.radius, self.period)
         t1 = _time.perf_counter()
         P = self.parts
-        wk, gw = ph.pair_kernel(rr, h)
-        divr, conc, gcx, gcy, lmat, mdiag = ph.geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol)
+        wk, gw = operators.pair_kernel(rr, h)
+        divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol)
         self.fs = divr < c.numerics.free_surface_threshold
-        contact, col = ph.wall_contact(start, nbr, nf, self.x, self.y, self.planes, self.dx, h,
+        contact, col = walls.wall_contact(start, nbr, nf, self.x, self.y, self.planes, self.dx, h,
                                        c.wall.cover_offset * self.dx)
-        detached = ph.detached_from_walls(contact, 0.75 * self.dx)
+        detached = walls.detached_from_walls(contact, 0.75 * self.dx)
         rh = c.rheology
         # pressure seen by the friction law (eq 5): clipped below at the overburden of half a
         # particle layer, ρ g cosθ dx/2 (free-surface and thin-front particles keep friction)
         if rh.pressure_filter == "mls":
-            p_seen = ph.mls_linear_average(start, nbr, rx, ry, wk, nf, h, self.p)
+            p_seen = operators.mls_linear_average(start, nbr, rx, ry, wk, nf, h, self.p)
         elif rh.pressure_filter == "shepard":
-            p_seen = ph.shepard_average(start, nbr, wk, nf, h, self.p)
+            p_seen = operators.shepard_average(start, nbr, wk, nf, h, self.p)
         else:
             p_seen = self.p
         self.p_rheo = np.maximum(p_seen, self.p_floor)
         if rh.model == "mu_i":
-            grad = ph.velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.x, self.y, self.u, self.v,
+            grad = operators.velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.x, self.y, self.u, self.v,
                                         lmat, self.p_rheo, self.eta, P.wnx, P.wny, P.wc, self.slip,
                                         c.wall.slip_length, self.mu_wall, self.dx, self.gx, self.gy, self.rho,
                                         rh.eta_max, self.wall_ns, self.wall_k)
             m = c.material
             if rh.regularisation == "none" and rh.mu_inf == 0.0:
-                self.eta, self.gdot = ph.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
+                self.eta, self.gdot = viscous.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
                                                         rh.eta_min, rh.eta_max)
             else:
                 self.eta, self.gdot = regularised_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2,
                                                             rh.mu_inf, m.I0, *self.reg, rh.eta_min, rh.eta_max)
         t2 = _time.perf_counter()
-        indptr, indices, data, diag_v = ph.assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, self.x, self.y,
+        indptr, indices, data, diag_v = viscous.assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, self.x, self.y,
                                                     self.u, self.v, self.p_rheo, self.eta, self.gdot, P.wnx, P.wny,
                                                     P.wc,
                                                     self.slip, c.wall.slip_length, self.mu_wall, self.dx,
                                                     dt, rho, self.eps2, self.mean, self.gx, self.gy,
                                                     rh.eta_max, self.lap_norm, self.wall_ns, self.wall_k)
         wall_du = wall_dv = None
-        if self.slip == ph.SLIP_COULOMB:
+        if self.slip == walls.SLIP_COULOMB:
             diag_u = data[indptr[:-1]].copy()
             wall_du, wall_dv = diag_u.copy(), diag_v.copy()
             if self.reaction_friction:
                 if self.wall_an is None or self.wall_an.shape[0] != nf:
                     self.wall_an = np.zeros((nf, self.planes.shape[0]))
-                ph.coulomb_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, self.mu_wall, dt,
+                walls.coulomb_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, self.mu_wall, dt,
                                               self.u_eps, diag_u, diag_v)
             else:
                 if c.wall.contact_length == "voronoi":
-                    clen = ph.contact_length(start, nbr, nf, self.x, self.y, contact, self.planes, self.dx)
+                    clen = walls.contact_length(start, nbr, nf, self.x, self.y, contact, self.planes, self.dx)
                 else:
                     clen = np.full(contact.shape, self.dx)
-                ph.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall,
+                walls.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall,
                                      self.gx, self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v, clen)
             data[indptr[:-1]] = diag_u
             wall_du = diag_u - wall_du
@@ -301,16 +303,16 @@ class IsphSolver:
         u_old, v_old = self.u, self.v
         # free-surface particles: diagonal renormalisation only (1/M_xx, 1/M_yy); with one-sided
         # support the full inverse mixes the wall-normal pressure gradient into the tangential one
-        lmat_p = ph.lmat_pressure(lmat, self.fs, *mdiag)
+        lmat_p = operators.lmat_pressure(lmat, self.fs, *mdiag)
         if c.numerics.projection == "adjoint_pair":
             self._project_adjoint_pair(start, nbr, rx, ry, rr, gw, lmat_p, conc, us, vs, dt)
         else:
             self._project_approximate(start, nbr, rx, ry, rr, gw, lmat, lmat_p, conc, us, vs, dt, detached)
         t4 = _time.perf_counter()
-        ncx, ncy = ph.smoothed_gradient(start, nbr, wk, nf, h, vol, gcx, gcy)
-        alpha = (ph.surface_band(start, nbr, wk, nf, self.fs, h, 2.0 * self.dx) if c.numerics.shifting_surface == "band"
+        ncx, ncy = operators.smoothed_gradient(start, nbr, wk, nf, h, vol, gcx, gcy)
+        alpha = (shifting.surface_band(start, nbr, wk, nf, self.fs, h, 2.0 * self.dx) if c.numerics.shifting_surface == "band"
                  else self.fs.astype(np.float64))
-        sx, sy = ph.shifting(nf, gcx, gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
+        sx, sy = shifting.shifting(nf, gcx, gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
                              ncx, ncy)
         ke_new = kinetic_energy(self.m, self.u, self.v)
         eb.projection += pressure_work(self.m, u_old, v_old, us, vs, self.u, self.v)
@@ -320,7 +322,7 @@ class IsphSolver:
         if self.period > 0:
             self.x[:nf] %= self.period
         e_before = ke_new + potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy)
-        n_clamped = ph.clamp_to_walls(nf, self.x, self.y, self.u, self.v, self.planes, 0.25 * self.dx,
+        n_clamped = walls.clamp_to_walls(nf, self.x, self.y, self.u, self.v, self.planes, 0.25 * self.dx,
                                       self.plane_lo, self.plane_hi)
         self.stats.clamped += n_clamped
         e_mech = e_before
@@ -351,7 +353,7 @@ class IsphSolver:
         if c.numerics.ppe_divergence == "adjoint":
             div = adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, us, vs, lmat_p)
         else:
-            div = ph.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
+            div = operators.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
         unknown = np.full(nf, -1, np.int64)
         interior = ~self.fs
         n_unknown = int(interior.sum())
@@ -360,12 +362,12 @@ class IsphSolver:
         # of a free-surface particle: p_fs = ρ g cosθ dx/2 (bed-normal hydrostatics), or 0
         p_new = np.where(self.fs, self.p_fs, 0.0)
         if n_unknown:
-            pi, pj, pd, rhs = ph.assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_new, div,
+            pi, pj, pd, rhs = ppe.assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_new, div,
                                               us, vs, conc, self.c0, c.numerics.density_relaxation, P.wnx, P.wny,
                                               dt, rho, self.eps2, self.a_full, self.lap_norm)
             p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
         self.p = p_new
-        gpx, gpy = ph.pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
+        gpx, gpy = operators.pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
                                         dt, rho, detached)
         self.u = us - dt / rho * gpx
         self.v = vs - dt / rho * gpy
