@@ -10,7 +10,7 @@ structure (sections, lists, names, types); every number with a physical meaning 
 stage validators. Every refusal is one :class:`ConfigError` line naming the config file that sets
 the key, the key and the allowed range::
 
-    config/ci.yaml: user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_deg = 25.5 ... (got 30.0)
+    config/ci.yaml: user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_internal_deg = 25.5 ... (got 30.0)
 """
 from __future__ import annotations
 

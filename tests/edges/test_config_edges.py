@@ -16,8 +16,8 @@ from granudep.isph.config import load_config
 @pytest.mark.parametrize("overrides, key", [
     ({"theta_deg": 16.0}, "geometry.theta_deg"),
     ({"H0": 0.05}, "geometry.H0"),
-    ({"phi_deg": 24.0}, "material.phi_deg"),
-    ({"phi_wall_deg": 20.0}, "wall.phi_wall_deg"),
+    ({"phi_internal_deg": 24.0}, "material.phi_internal_deg"),
+    ({"phi_basal_deg": 20.0}, "wall.phi_basal_deg"),
 ])
 def test_isph_paper_case_with_changed_geometry_or_material_is_refused(overrides, key):
     with pytest.raises(ConfigError, match=rf"^{key}: .* changes the paper case 'T22-A70'"):
@@ -91,8 +91,8 @@ def test_run_da_uses_the_deposition_section(monkeypatch):
 
 
 def test_isph_section_overrides():
-    cfg = load_config("T22-A70", numerics={"dx": 0.01, "cfl": 0.1}, output={"interval": 0.05})
-    assert cfg.numerics.dx == 0.01 and cfg.numerics.cfl == 0.1 and cfg.output.interval == 0.05
+    cfg = load_config("T22-A70", numerics={"dx": 0.01, "cfl": 0.1}, output={"dt_output": 0.05})
+    assert cfg.numerics.dx == 0.01 and cfg.numerics.cfl == 0.1 and cfg.output.dt_output == 0.05
     with pytest.raises(ConfigError, match="numerics.dxx: unknown key"):
         load_config("T22-A70", numerics={"dxx": 0.01})
     with pytest.raises(ConfigError, match="^numerics: must be a mapping"):
@@ -101,10 +101,10 @@ def test_isph_section_overrides():
 
 # --- item 7: impossible inputs ------------------------------------------------------------------
 def test_isph_slope_steeper_than_friction_is_refused():
-    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < material.phi_deg = 25.5"):
+    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < material.phi_internal_deg = 25.5"):
         load_config({"case": "steep", "geometry": {"theta_deg": 30.0}})
-    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < wall.phi_wall_deg = 20.0"):
-        load_config({"case": "steep", "geometry": {"theta_deg": 22.0}, "wall": {"phi_wall_deg": 20.0}})
+    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < wall.phi_basal_deg = 20.0"):
+        load_config({"case": "steep", "geometry": {"theta_deg": 22.0}, "wall": {"phi_basal_deg": 20.0}})
 
 
 def test_da_slope_steeper_than_basal_friction_is_refused():

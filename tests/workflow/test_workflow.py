@@ -43,7 +43,7 @@ SCHEMA_REFUSALS = [
 ONE_LINE_REFUSALS = [
     ("isph: {dx: .nan}\n", "isph.dx: must be a finite number (got nan)"),
     ("user_cases: [{name: steep, theta_deg: 30, L0: 0.2, H0: 0.1}]\n",
-     "user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_deg = 25.5"),
+     "user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_internal_deg = 25.5"),
     ("user_cases: [{name: big, theta_deg: 20, L0: 7, H0: 0.1}]\n",
      "user_cases[0].L0: isph run 'big': geometry.L0: must be > 0.0 and <= 5.0 (got 7.0)"),
     ("da: {n_particles: 500000}\n", "da.n_particles: da run '1D-A30_deposition': numerics.n_particles: "

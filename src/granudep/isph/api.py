@@ -61,7 +61,7 @@ def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any 
     LOG.info("isph %s: theta=%.1f deg, L0=%.3f m, H0=%.3f m, dx=%.4f m, t_end=%.3f s (%.1f t_c), slip=%s",
              cfg.case, cfg.geometry.theta_deg, cfg.geometry.L0, cfg.geometry.H0, cfg.numerics.dx, cfg.t_end,
              cfg.t_end / cfg.t_c, cfg.wall.slip)
-    prog = make_progress(progress, cfg.output.progress_s, total=cfg.t_end, on_stop=_stop(cfg), desc=f"isph {cfg.case}")
+    prog = make_progress(progress, cfg.output.progress_every_s, total=cfg.t_end, on_stop=_stop(cfg), desc=f"isph {cfg.case}")
     try:
         solver, snaps, status, ttr = run(cfg, on_snapshot=lambda s, snaps: prog.update(s.t), progress=prog,
                                          checkpoint=ckpt)
@@ -100,7 +100,7 @@ def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any 
 def warmup() -> None:
     """Compile (and cache) every numba kernel with a few steps of a tiny collapse."""
     cfg = load_config({"case": "warmup", "geometry": {"L0": 0.04, "H0": 0.04, "domain_length": 0.2},
-                       "numerics": {"dx": 0.01, "t_end": 0.01}, "output": {"progress_s": 1e9}})
+                       "numerics": {"dx": 0.01, "t_end": 0.01}, "output": {"progress_every_s": 1e9}})
     run(cfg, progress=Progress(1e9))
     for slip in ("no_slip",):
         run(load_config(cfg, **{"wall.slip": slip}), progress=Progress(1e9))
