@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal, Mapping
+from typing import Literal, Mapping
 
 from ..cases import check_case_name, material, momentum_scale, table5
 from ..config import ConfigError, build, config_data, merge, param
