@@ -37,8 +37,9 @@ def run_isph(case_or_config: Any, output: str | Path | None = None, progress: An
 
     ``overrides`` name config fields (``dx=0.008``, ``t_end=1.0``, ``wall.slip="no_slip"``) or
     whole sections (``numerics={"dx": 0.008}``). With ``output`` the dataset is written there
-    (atomically; the path is checked before the run), also when the run blows up: then the
-    snapshots so far are written with ``status = "failed: ..."`` and IsphBlowUp is re-raised.
+    (atomically; the path is checked before the run); when the run blows up, the snapshots so far
+    go to ``NAME.failed.nc`` beside it (as a failed DA run's do), with ``status = "failed: ..."``,
+    and IsphBlowUp is re-raised.
     ``progress``: None/"auto" (a tqdm bar in a terminal or notebook, plain log lines otherwise),
     "log", "bar", False (silent). Bad input raises ConfigError before any work.
 
@@ -74,8 +75,8 @@ def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any 
                            float("nan"))
         exc.dataset = ds
         if output is not None:
-            from ..cliutil import interrupted_path
-            path = interrupted_path(output) if interrupted else output
+            from ..cliutil import failed_path, interrupted_path
+            path = interrupted_path(output) if interrupted else failed_path(output)  # as the DA: never the final name
             write_netcdf(ds, path)
             exc.output = path
             (LOG.info if interrupted else LOG.error)(  # the CLI's one error line says it for a stop
