@@ -404,3 +404,12 @@ def config_data(cls: type, source: Any, overrides: Mapping[str, Any] | None = No
         if defaults is not None:
             data = merge(defaults, data)
     return merge(data, overrides_mapping(cls, overrides or {}))
+
+
+def flat_config(cls: type, data: Mapping[str, Any] | None = None, overrides: Mapping[str, Any] | None = None, *,
+                prefix: str):
+    """A stage config without sections (monitor, regress) by the same rule: a YAML mapping plus
+    overrides, each key the config's own, bare or dotted with the stage's name (``monitor.width_factor``);
+    ``None`` values skipped (an option not given)."""
+    over = {k.removeprefix(f"{prefix}."): v for k, v in (overrides or {}).items() if v is not None}
+    return build(cls, merge(dict(data or {}), over), prefix=prefix)

@@ -30,7 +30,7 @@ def _root(stage: str):
 
 
 def _resolve(stage: str, source: str | None, overrides: dict):
-    from .config import build
+    from .config import flat_config
     if stage == "isph":
         from .isph.config import load_config
         return load_config(source if source is not None else {"case": "my-run"}, **overrides)
@@ -40,8 +40,7 @@ def _resolve(stage: str, source: str | None, overrides: dict):
                                                                                            "A": -0.03, "B": 0.05}},
                        **overrides)
     data = load_yaml(source) if source is not None else {}
-    data = {**data, **{k.split(".", 1)[-1]: v for k, v in overrides.items()}}
-    return build(_root(stage), data, prefix=stage if stage == "monitor" else "regress")
+    return flat_config(_root(stage), data, overrides, prefix=stage if stage == "monitor" else "regress")
 
 
 def guess_stage(source: str) -> str:

@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from .. import cases
-from ..config import ConfigError, build, to_yaml
+from ..config import ConfigError, flat_config, to_yaml
 from ..io import open_dataset, provenance, var
 from ..progress import LOG, Progress
 from .config import MonitorConfig
@@ -39,7 +39,7 @@ def _load(run) -> xr.Dataset:
 def _config(overrides: dict) -> MonitorConfig:
     if "wm_factors" in overrides and overrides["wm_factors"] is not None:
         overrides = {**overrides, "wm_factors": list(overrides["wm_factors"])}
-    return build(MonitorConfig, {k: v for k, v in overrides.items() if v is not None}, prefix="monitor")
+    return flat_config(MonitorConfig, overrides=overrides, prefix="monitor")
 
 
 def _geometry(run: xr.Dataset, cfg: MonitorConfig) -> dict:

@@ -27,9 +27,8 @@ def _overrides(args) -> dict:
     if args.interface_threshold is not None:
         raise ConfigError("--interface-threshold: renamed to --divergence-threshold (monitor.divergence_threshold; "
                           "one name per quantity across stages)")
-    sets = {k.removeprefix("monitor."): v for k, v in parse_sets(args.set).items()}
     return {"critical_speed": args.critical_speed, "divergence_threshold": args.divergence_threshold,
-            "x_inf": args.x_inf, "n_sections": args.n_sections, **sets}
+            "x_inf": args.x_inf, "n_sections": args.n_sections, **parse_sets(args.set)}
 
 
 def _prepare(args, default_dir: str, overrides: dict):
