@@ -58,6 +58,9 @@ ONE_LINE_REFUSALS = [
      "isph.set.numerics.projection: isph run 'T10-A35': numerics.projection: must be one of"),
     ("isph: {set: {numerics.projection: approximate, wall.coulomb_normal: projection}}\n",
      "isph.set.wall.coulomb_normal: isph run 'T10-A35': wall.coulomb_normal: projection needs"),
+    # issue 15: an old key name is refused, naming the new one
+    ("isph: {set: {output.interval: 0.02}}\n",
+     "isph.set.output.interval: isph run 'T10-A35': output.interval: renamed to output.dt_output"),
 ]
 ISPH_SET = "isph: {set: {numerics.projection: approximate, wall.coulomb_normal: contact}}\n"
 YAML_1_2 = "isph: {dx: 5e-3}\n"
