@@ -10,7 +10,7 @@ import dataclasses
 import typing
 from pathlib import Path
 
-from .config import ConfigError, _range_text, load_yaml, to_dict
+from .config import ConfigError, _range_text, load_yaml, renamed, to_dict
 
 STAGES = ("isph", "da", "monitor", "regress")
 
@@ -58,10 +58,10 @@ def guess_stage(source: str) -> str:
             return "isph"
         if keys & {"deposition"} or "n_particles" in (data.get("numerics") or {}):
             return "da"
-        if keys & {f.name for f in dataclasses.fields(_root("monitor"))}:
-            return "monitor"
-        if keys & {f.name for f in dataclasses.fields(_root("regress"))}:
-            return "regress"
+        for stage in ("monitor", "regress"):  # an old key name counts: the stage's build then names the new one
+            cls = _root(stage)
+            if keys & ({f.name for f in dataclasses.fields(cls)} | set(renamed(cls))):
+                return stage
         raise ConfigError(f"{source}: cannot tell the stage from its keys; give --stage isph|da|monitor|regress")
     raise ConfigError(f"case: unknown case {source!r} (a Table 1/5 case name or a YAML file; `granudep cases`)")
 
@@ -89,6 +89,8 @@ def _lines(obj, cls, prefix: str = "", indent: int = 0, commented: bool = False)
             bits.append("one of " + ", ".join(map(str, choices)))
         if meta.get("doc"):
             bits.append(str(meta["doc"]))
+        if meta.get("was"):
+            bits.append(f"formerly {meta['was']}")
         import yaml
         text = yaml.safe_dump({f.name: to_dict(value)}, default_flow_style=True, width=10_000).strip()[1:-1]
         out.append(f"{pad}{text}" + (f"    # {'; '.join(bits)}" if bits else ""))
