@@ -361,9 +361,8 @@ def overrides_mapping(cls: type, overrides: Mapping[str, Any], example: str = ""
                 raise ConfigError(f"{key}: renamed to {old[key].rsplit('.', 1)[-1]} ({old[key]}; one name per "
                                   f"quantity across stages)")
             if not where:
-                allowed = f"a section {sorted(secs)}, section.key or a unique key" if secs else "one of"
-                raise ConfigError(f"{key}: unknown override (allowed: {allowed} such as "
-                                  f"{example or ', '.join(sorted(idx)[:3])})")
+                raise ConfigError(f"{key}: unknown override (allowed: a section {sorted(secs)}, section.key or a "
+                                  f"unique key such as {example or ', '.join(sorted(idx)[:3])})")
             if len(where) > 1:
                 raise ConfigError(f"{key}: ambiguous override (use one of {', '.join(where)})")
             dotted = where[0]
@@ -376,7 +375,7 @@ def overrides_mapping(cls: type, overrides: Mapping[str, Any], example: str = ""
 
 def config_data(cls: type, source: Any, overrides: Mapping[str, Any] | None = None, *,
                 paper_case: Callable[[str], Mapping | None], case_mapping: Callable[[str], Mapping],
-                on_file: Callable[[dict, Path], dict] | None = None) -> dict:
+                on_file: Callable[[dict, Path], dict] | None = None, example: str = "") -> dict:
     """The one loader of a stage config (ISPH, DA): its mapping before :func:`build`.
 
     ``source`` is a ``cls`` instance, a mapping, a YAML path or a case name. A mapping or YAML naming
@@ -384,7 +383,7 @@ def config_data(cls: type, source: Any, overrides: Mapping[str, Any] | None = No
     case's defaults under its own keys; a bare case name is ``case_mapping(name)`` (which refuses an
     unknown name); a YAML file without ``case`` is named after its stem; ``on_file`` may rewrite a
     file's mapping (the DA anchors a path CSV next to its YAML). Then :func:`overrides_mapping` is
-    merged on top: one override rule for every stage.
+    merged on top: one override rule for every stage (``example``: keys its refusal suggests).
     """
     if isinstance(source, cls):
         data = to_dict(source)
@@ -403,7 +402,7 @@ def config_data(cls: type, source: Any, overrides: Mapping[str, Any] | None = No
         defaults = paper_case(data["case"])
         if defaults is not None:
             data = merge(defaults, data)
-    return merge(data, overrides_mapping(cls, overrides or {}))
+    return merge(data, overrides_mapping(cls, overrides or {}, example))
 
 
 def flat_config(cls: type, data: Mapping[str, Any] | None = None, overrides: Mapping[str, Any] | None = None, *,

@@ -199,7 +199,7 @@ def resolve(case_or_config: str | Path | Mapping | DAConfig, deposition: bool | 
     ``deposition`` (true/false or the section's mapping) is merged last.
     """
     data = config_data(DAConfig, case_or_config, overrides, paper_case=_paper_case, case_mapping=case_mapping,
-                       on_file=anchor_path_file)
+                       on_file=anchor_path_file, example="n_particles, cfl, x_inf_mode")
     if isinstance(deposition, Mapping):  # run_da(..., deposition={"ab_source": "user", ...}): the section
         data = merge(data, {"deposition": {"enabled": True, **dict(deposition)}})
     elif deposition is not None:

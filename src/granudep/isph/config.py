@@ -350,4 +350,5 @@ def load_config(case_or_config: Any, **overrides) -> IsphConfig:
     mapping naming a paper case inherits its geometry unless it sets one.
     """
     return build(IsphConfig, config_data(IsphConfig, case_or_config, overrides, paper_case=_paper_case,
-                                         case_mapping=lambda name: {"case": name, "geometry": case_geometry(name)}))
+                                         case_mapping=lambda name: {"case": name, "geometry": case_geometry(name)},
+                                         example="dx, t_end, theta_deg"))
