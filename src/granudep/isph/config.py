@@ -47,7 +47,7 @@ class Material:
     d: float = param(_GB["d"], gt=0.0, lt=0.1, unit="m", doc="grain diameter (Table 2)")
     rho_s: float = param(_GB["rho_s"], gt=0.0, unit="kg m-3", doc="grain density (Table 2)")
     rho: float = param(_GB["rho"], gt=0.0, unit="kg m-3", doc="bulk density of the continuum (Table 2)")
-    phi_internal_deg: float = param(_GB["phi_deg"], gt=0.0, lt=90.0, unit="deg", was="phi_deg",
+    phi_internal_deg: float = param(_GB["phi_internal_deg"], gt=0.0, lt=90.0, unit="deg", was="phi_deg",
                                     doc="internal friction angle phi_I; mu_s = tan(phi_I)")
     mu_2: float = param(0.73, gt=0.0, unit="1", doc="limiting friction at large I (paper: 'mu_s ~ 0.73')")
     I0: float = param(0.279, gt=0.0, unit="1", doc="inertial-number scale (Ionescu et al. 2015)")
@@ -102,7 +102,7 @@ class Wall:
     slip: str = param("coulomb", choices=("no_slip", "navier", "free_slip", "coulomb"),
                       doc="basal/back-wall condition for the viscous stress")
     slip_length: float = param(0.0, ge=0.0, unit="m", doc="Navier slip length b (slip = navier)")
-    phi_basal_deg: float = param(_GB["phi_deg"], gt=0.0, lt=90.0, unit="deg", was="phi_wall_deg",
+    phi_basal_deg: float = param(_GB["phi_internal_deg"], gt=0.0, lt=90.0, unit="deg", was="phi_wall_deg",
                                  doc="Coulomb wall friction angle phi_B (slip = coulomb)")
     stick_speed: float = param(1.0e-4, gt=0.0, unit="m s-1",
                                doc="Coulomb regularisation: below this tangential speed the wall friction is a stiff drag")
