@@ -1,8 +1,9 @@
-"""``granudep config show CASE|YAML`` and ``granudep config template STAGE``.
+"""``granudep config show CASE|YAML``, ``granudep config template STAGE``, ``granudep config write``.
 
 ``show`` prints the resolved config of a run (what the stage would use, after the case's geometry,
 the YAML and any ``--set``) with each key's unit, allowed range and meaning; ``template`` prints
-a complete, commented YAML of a stage's defaults to start a config from.
+a complete, commented YAML of a stage's defaults to start a config from; ``write`` writes a config
+file from dotted keys (the workflow's per-run configs: user cases, sensitivity runs).
 """
 from __future__ import annotations
 
@@ -117,9 +118,27 @@ def _cmd_template(args) -> int:
     return 0
 
 
+def _cmd_write(args) -> int:
+    from .cliutil import parse_sets
+    from .config import merge
+    from .io import check_output, write_text
+    import yaml
+    check_output(args.output, suffixes=(".yaml", ".yml"))
+    data: dict = {}
+    for key, value in parse_sets(args.set).items():
+        for part in reversed(key.split(".")):
+            value = {part: value}
+        data = merge(data, value)
+    if not data:
+        raise ConfigError("config write: give at least one --set KEY=VALUE")
+    write_text(yaml.safe_dump(data, sort_keys=False), args.output)
+    print(args.output)
+    return 0
+
+
 def register(sub) -> None:
     p = sub.add_parser("config", help="show a resolved config with units and ranges, or print a template")
-    csub = p.add_subparsers(dest="config_command", metavar="show|template", required=True)
+    csub = p.add_subparsers(dest="config_command", metavar="show|template|write", required=True)
     s = csub.add_parser("show", help="the resolved config of a case or YAML, with units, ranges and meanings")
     s.add_argument("source", metavar="CASE|CONFIG.yaml")
     s.add_argument("--stage", choices=STAGES, help="the stage (default: from the case name or the YAML's keys)")
@@ -129,3 +148,8 @@ def register(sub) -> None:
     t = csub.add_parser("template", help="a complete commented YAML of a stage's defaults")
     t.add_argument("stage", choices=STAGES)
     t.set_defaults(func=_cmd_template)
+    w = csub.add_parser("write", help="write a config YAML from dotted keys (checked by the stage when it runs)")
+    w.add_argument("-o", "--output", required=True, metavar="CONFIG.yaml")
+    w.add_argument("--set", dest="set", action="append", default=[], metavar="KEY=VALUE",
+                   help="one key, dotted for a section (geometry.L0=0.2), YAML value (repeatable; in order)")
+    w.set_defaults(func=_cmd_write)

@@ -356,6 +356,22 @@ def test_config_template_is_a_valid_config_of_the_stage(tmp_path, capsys, stage)
     assert capsys.readouterr().out.count("\n") > 5
 
 
+def test_config_write_gives_the_yaml_the_workflow_rules_wrote_before(tmp_path, capsys):
+    """`granudep config write` (rules user_case_config, sensitivity_config): dotted keys in order,
+    YAML values (a quoted '123' stays a string), the same bytes as the rules' yaml.safe_dump."""
+    import yaml
+    from granudep.cli import main
+    out = tmp_path / "c.yaml"
+    assert main(["config", "write", "-o", str(out), "--set", "case='123'", "--set", "geometry.theta_deg=20",
+                 "--set", "geometry.L0=0.2", "--set", "wall.phi_basal_deg=23.5"]) == 0
+    assert out.read_text() == yaml.safe_dump({"case": "123", "geometry": {"theta_deg": 20, "L0": 0.2},
+                                              "wall": {"phi_basal_deg": 23.5}}, sort_keys=False)
+    assert load_config(out).wall.phi_basal_deg == 23.5
+    assert main(["config", "write", "-o", str(tmp_path / "c.txt"), "--set", "a=1"]) == 2
+    assert main(["config", "write", "-o", str(out)]) == 2
+    assert "give at least one --set" in capsys.readouterr().err
+
+
 def test_config_show_resolves_with_units_and_ranges(capsys):
     from granudep.cli import main
     assert main(["config", "show", "T22-A70", "--set", "numerics.dx=0.01"]) == 0

@@ -71,18 +71,18 @@ rule sensitivity_config:
     wildcard_constraints:
         stage="isph|da",
     params:
-        data=lambda wc: sens_override(IsphConfig, wc.sens, SENS["isph_case"])
-        if wc.stage == "isph"
-        else sens_override(DAConfig, wc.sens, SENS["da_case"]),
+        set=lambda wc: set_options(
+            sens_override(IsphConfig, wc.sens, SENS["isph_case"])
+            if wc.stage == "isph"
+            else sens_override(DAConfig, wc.sens, SENS["da_case"])
+        ),
     log:
         f"{LOGS}/sensitivity/config/{{stage}}_{{sens}}.log",
-    run:
-        import yaml
-
-        with open(output[0], "w") as fh:
-            fh.write(yaml.safe_dump(params.data, sort_keys=False))
-        with open(log[0], "w") as fh:
-            fh.write(f"wrote {output[0]}\n")
+    benchmark:
+        f"{BENCH}/sensitivity/config/{{stage}}_{{sens}}.tsv"
+    threads: 1
+    shell:
+        "granudep config write -o {output} {params.set} > {log} 2>&1"
 
 
 # The chain isph -> monitor -> regress -> da is the main rules (isph.smk, monitor.smk, regress.smk,
