@@ -85,7 +85,7 @@ def main() -> None:
               f"direct fallbacks {r['fallbacks']}]")
     if args.full:
         t0 = time.perf_counter()
-        ds = run_isph("T22-A70", dx=0.004, progress_s=30.0,
+        ds = run_isph("T22-A70", dx=0.004, progress_every_s=30.0,
                       **{"numerics.pressure_solver": args.full_solver, "numerics.viscous_solver": args.full_solver})
         wall = time.perf_counter() - t0
         print(f"T22-A70 dx=4mm ({args.full_solver}): {ds.attrs['status']} at t={float(ds.time[-1]):.3f} s, time_to_rest="

@@ -58,7 +58,7 @@ CASE = "T22-A150"
 
 def _cfg(case: str, dx: float, solver: str | None = None):
     from granudep.isph.config import load_config
-    over = {"dx": dx, "progress_s": 1e9}
+    over = {"dx": dx, "progress_every_s": 1e9}
     if solver:
         over["numerics.pressure_solver"] = solver
     return load_config(case, **over)
@@ -202,7 +202,7 @@ def to_rest(args) -> None:
     for d in args.to_rest.split(","):
         dx = float(d) * 1e-3
         t0 = time.perf_counter()
-        ds = run_isph("T22-A70", dx=dx, progress_s=60.0, **({"numerics.pressure_solver": args.solvers.split(",")[0]}))
+        ds = run_isph("T22-A70", dx=dx, progress_every_s=60.0, **({"numerics.pressure_solver": args.solvers.split(",")[0]}))
         wall = time.perf_counter() - t0
         print(f"T22-A70 dx={d}mm ({ds.attrs['n_particles']} particles, NUMBA_NUM_THREADS="
               f"{os.environ.get('NUMBA_NUM_THREADS', '(unset)')}): {ds.attrs['status']} at t={float(ds.time[-1]):.3f} s, "

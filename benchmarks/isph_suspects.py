@@ -40,7 +40,7 @@ VARIANTS = {
 def run_one(name: str, dx: float) -> dict:
     from granudep.isph.api import run_isph
     t0 = time.perf_counter()
-    ds = run_isph("T22-A70", dx=dx, **{"numerics.energy_limit": 10.0, "output.progress_s": 1e9}, **VARIANTS[name])
+    ds = run_isph("T22-A70", dx=dx, **{"numerics.energy_limit": 10.0, "output.progress_every_s": 1e9}, **VARIANTS[name])
     l0 = float(ds.attrs["L0"])
     row = {"variant": name, "dx_mm": dx * 1e3, "status": ds.attrs["status"],
            "t_rest_norm": float(ds.attrs["time_to_rest_norm"]),

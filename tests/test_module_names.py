@@ -1,4 +1,5 @@
-"""Module names say what they make (issue 15); the old `compare` names keep working."""
+"""Module names say what they make (issue 15); the old `compare` names keep working; the report
+stage is one package with its own CLI and no upward import."""
 from __future__ import annotations
 
 import ast
@@ -9,10 +10,10 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "granudep"
 
 def test_old_compare_names_are_the_new_modules():
     import granudep.compare
-    import granudep.da_vs_reference
     import granudep.regress.compare
     import granudep.regress.paper_tables
-    assert granudep.compare is granudep.da_vs_reference
+    import granudep.report.da_vs_reference
+    assert granudep.compare is granudep.report.da_vs_reference
     assert granudep.regress.compare is granudep.regress.paper_tables
     from granudep.compare import compare, reference_from_isph  # noqa: F401
     from granudep.regress.compare import table3_comparison, table5_comparison  # noqa: F401
@@ -29,6 +30,20 @@ def _imports(path: Path) -> set[str]:
 
 
 def test_report_and_claims_do_not_import_upward_into_figures():
-    for name in ("report.py", "claims.py", "da_vs_reference.py", "readme_status.py"):
-        bad = [m for m in _imports(SRC / name) if "figures" in m]
-        assert not bad, f"{name} imports {bad}"
+    files = sorted((SRC / "report").glob("*.py"))
+    assert {f.name for f in files} >= {"summary.py", "claims.py", "da_vs_reference.py", "readme_status.py",
+                                       "captions.py", "cli.py"}
+    for path in files:
+        bad = [m for m in _imports(path) if "figures" in m]
+        assert not bad, f"report/{path.name} imports {bad}"
+
+
+def test_the_report_stage_registers_its_own_commands():
+    from granudep.cli import build_parser
+    from granudep.report import cli
+    sub = build_parser()._subparsers._group_actions[0]
+    for name in ("reference", "compare", "summary", "sensitivity-table", "readme-status"):
+        assert sub.choices[name].get_default("func").__module__.startswith("granudep.report."), name
+    assert sub.choices["reference"].get_default("func") is cli._cmd_reference
+    figures = sub.choices["figure"]._subparsers._group_actions[0].choices
+    assert {f.get_default("func").__module__ for f in figures.values()} == {"granudep.figures.cli"}

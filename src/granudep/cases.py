@@ -50,14 +50,14 @@ def table5() -> pd.DataFrame:
 
 
 def material(name: str = "glass_beads") -> dict:
-    """One row of Table 2 as a dict in SI units (d in m)."""
+    """One row of Table 2 as a dict in SI units (d in m; the friction angle under the configs' name)."""
     t = table2()
     row = t[t.material == name]
     if row.empty:
         raise ConfigError(f"material: unknown material {name!r} (allowed: {', '.join(t.material)})")
     r = row.iloc[0]
     return {"d": float(r.d_mm) * 1e-3, "rho_s": float(r.rho_s_kg_m3), "solid_fraction": float(r.solid_fraction),
-            "rho": float(r.rho_bulk_kg_m3), "phi_deg": float(r.phi_deg)}
+            "rho": float(r.rho_bulk_kg_m3), "phi_internal_deg": float(r.phi_deg)}
 
 
 def check_case_name(name: str) -> str:

@@ -52,6 +52,15 @@ def interrupted_path(out) -> "os.PathLike":
     return out.with_name(out.stem + ".interrupted.nc")
 
 
+def failed_path(out) -> "os.PathLike":
+    """Where a run that failed (an ISPH blow-up, a DA particle leaving the domain) writes the outputs it
+    has until the failure: NAME.failed.nc, never the final name (a workflow would take it for a result;
+    Snakemake deletes a failed job's declared outputs anyway)."""
+    from pathlib import Path
+    out = Path(out)
+    return out.with_name(out.stem + ".failed.nc")
+
+
 def add_checkpoint_args(p) -> None:
     """``--checkpoint FILE``, ``--checkpoint-every S``, ``--restart CHECKPOINT|auto`` (the DA and ISPH runs)."""
     p.add_argument("--checkpoint", metavar="FILE", help="checkpoint file (default OUT folder/.{OUT stem}.ckpt)")

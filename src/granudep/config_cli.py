@@ -1,8 +1,9 @@
-"""``granudep config show CASE|YAML`` and ``granudep config template STAGE``.
+"""``granudep config show CASE|YAML``, ``granudep config template STAGE``, ``granudep config write``.
 
 ``show`` prints the resolved config of a run (what the stage would use, after the case's geometry,
 the YAML and any ``--set``) with each key's unit, allowed range and meaning; ``template`` prints
-a complete, commented YAML of a stage's defaults to start a config from.
+a complete, commented YAML of a stage's defaults to start a config from; ``write`` writes a config
+file from dotted keys (the workflow's per-run configs: user cases, sensitivity runs).
 """
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import dataclasses
 import typing
 from pathlib import Path
 
-from .config import ConfigError, _range_text, load_yaml, to_dict
+from .config import ConfigError, _range_text, load_yaml, renamed, to_dict
 
 STAGES = ("isph", "da", "monitor", "regress")
 
@@ -30,7 +31,7 @@ def _root(stage: str):
 
 
 def _resolve(stage: str, source: str | None, overrides: dict):
-    from .config import build
+    from .config import flat_config
     if stage == "isph":
         from .isph.config import load_config
         return load_config(source if source is not None else {"case": "my-run"}, **overrides)
@@ -40,8 +41,7 @@ def _resolve(stage: str, source: str | None, overrides: dict):
                                                                                            "A": -0.03, "B": 0.05}},
                        **overrides)
     data = load_yaml(source) if source is not None else {}
-    data = {**data, **{k.split(".", 1)[-1]: v for k, v in overrides.items()}}
-    return build(_root(stage), data, prefix=stage if stage == "monitor" else "regress")
+    return flat_config(_root(stage), data, overrides, prefix=stage if stage == "monitor" else "regress")
 
 
 def guess_stage(source: str) -> str:
@@ -59,10 +59,10 @@ def guess_stage(source: str) -> str:
             return "isph"
         if keys & {"deposition"} or "n_particles" in (data.get("numerics") or {}):
             return "da"
-        if keys & {f.name for f in dataclasses.fields(_root("monitor"))}:
-            return "monitor"
-        if keys & {f.name for f in dataclasses.fields(_root("regress"))}:
-            return "regress"
+        for stage in ("monitor", "regress"):  # an old key name counts: the stage's build then names the new one
+            cls = _root(stage)
+            if keys & ({f.name for f in dataclasses.fields(cls)} | set(renamed(cls))):
+                return stage
         raise ConfigError(f"{source}: cannot tell the stage from its keys; give --stage isph|da|monitor|regress")
     raise ConfigError(f"case: unknown case {source!r} (a Table 1/5 case name or a YAML file; `granudep cases`)")
 
@@ -90,6 +90,8 @@ def _lines(obj, cls, prefix: str = "", indent: int = 0, commented: bool = False)
             bits.append("one of " + ", ".join(map(str, choices)))
         if meta.get("doc"):
             bits.append(str(meta["doc"]))
+        if meta.get("was"):
+            bits.append(f"formerly {meta['was']}")
         import yaml
         text = yaml.safe_dump({f.name: to_dict(value)}, default_flow_style=True, width=10_000).strip()[1:-1]
         out.append(f"{pad}{text}" + (f"    # {'; '.join(bits)}" if bits else ""))
@@ -116,9 +118,27 @@ def _cmd_template(args) -> int:
     return 0
 
 
+def _cmd_write(args) -> int:
+    from .cliutil import parse_sets
+    from .config import merge
+    from .io import check_output, write_text
+    import yaml
+    check_output(args.output, suffixes=(".yaml", ".yml"))
+    data: dict = {}
+    for key, value in parse_sets(args.set).items():
+        for part in reversed(key.split(".")):
+            value = {part: value}
+        data = merge(data, value)
+    if not data:
+        raise ConfigError("config write: give at least one --set KEY=VALUE")
+    write_text(yaml.safe_dump(data, sort_keys=False), args.output)
+    print(args.output)
+    return 0
+
+
 def register(sub) -> None:
     p = sub.add_parser("config", help="show a resolved config with units and ranges, or print a template")
-    csub = p.add_subparsers(dest="config_command", metavar="show|template", required=True)
+    csub = p.add_subparsers(dest="config_command", metavar="show|template|write", required=True)
     s = csub.add_parser("show", help="the resolved config of a case or YAML, with units, ranges and meanings")
     s.add_argument("source", metavar="CASE|CONFIG.yaml")
     s.add_argument("--stage", choices=STAGES, help="the stage (default: from the case name or the YAML's keys)")
@@ -128,3 +148,8 @@ def register(sub) -> None:
     t = csub.add_parser("template", help="a complete commented YAML of a stage's defaults")
     t.add_argument("stage", choices=STAGES)
     t.set_defaults(func=_cmd_template)
+    w = csub.add_parser("write", help="write a config YAML from dotted keys (checked by the stage when it runs)")
+    w.add_argument("-o", "--output", required=True, metavar="CONFIG.yaml")
+    w.add_argument("--set", dest="set", action="append", default=[], metavar="KEY=VALUE",
+                   help="one key, dotted for a section (geometry.L0=0.2), YAML value (repeatable; in order)")
+    w.set_defaults(func=_cmd_write)

@@ -3,14 +3,14 @@
 The Snakefile calls :func:`check_structure` on the merged config before it reads anything from it,
 then, once every rule is defined, :func:`check_jobs` with one :class:`Job` per stage run it would
 schedule. Each job builds its stage config with the stage's own builder (``isph.config.load_config``,
-``da.config.resolve``, ``build(MonitorConfig, ...)``) from the same arguments its shell command
+``da.config.resolve``, ``flat_config(MonitorConfig, ...)``) from the same arguments its shell command
 passes to ``granudep``, so ``snakemake -n`` refuses exactly what the jobs would, before any job
 runs. The JSON schema (``workflow/schemas/config.schema.yaml``) only checks the workflow's own
 structure (sections, lists, names, types); every number with a physical meaning is checked by the
 stage validators. Every refusal is one :class:`ConfigError` line naming the config file that sets
 the key, the key and the allowed range::
 
-    config/ci.yaml: user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_deg = 25.5 ... (got 30.0)
+    config/ci.yaml: user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_internal_deg = 25.5 ... (got 30.0)
 """
 from __future__ import annotations
 
@@ -238,10 +238,10 @@ def da_job(label: str, source: Any, key: Key, keys: dict[str, Key], deposition: 
 
 
 def monitor_job(label: str, key: Key, keys: dict[str, Key], **overrides) -> Job:
-    from .config import build
+    from .config import flat_config
     from .monitor.config import MonitorConfig
-    over = {k: (list(v) if isinstance(v, tuple) else v) for k, v in overrides.items() if v is not None}
-    return Job(label, lambda: build(MonitorConfig, over, prefix="monitor"), key, keys)
+    over = {k: (list(v) if isinstance(v, tuple) else v) for k, v in overrides.items()}
+    return Job(label, lambda: flat_config(MonitorConfig, overrides=over, prefix="monitor"), key, keys)
 
 
 def user_case_mapping(entry: Mapping) -> dict:

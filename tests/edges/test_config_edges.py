@@ -16,8 +16,8 @@ from granudep.isph.config import load_config
 @pytest.mark.parametrize("overrides, key", [
     ({"theta_deg": 16.0}, "geometry.theta_deg"),
     ({"H0": 0.05}, "geometry.H0"),
-    ({"phi_deg": 24.0}, "material.phi_deg"),
-    ({"phi_wall_deg": 20.0}, "wall.phi_wall_deg"),
+    ({"phi_internal_deg": 24.0}, "material.phi_internal_deg"),
+    ({"phi_basal_deg": 20.0}, "wall.phi_basal_deg"),
 ])
 def test_isph_paper_case_with_changed_geometry_or_material_is_refused(overrides, key):
     with pytest.raises(ConfigError, match=rf"^{key}: .* changes the paper case 'T22-A70'"):
@@ -91,8 +91,8 @@ def test_run_da_uses_the_deposition_section(monkeypatch):
 
 
 def test_isph_section_overrides():
-    cfg = load_config("T22-A70", numerics={"dx": 0.01, "cfl": 0.1}, output={"interval": 0.05})
-    assert cfg.numerics.dx == 0.01 and cfg.numerics.cfl == 0.1 and cfg.output.interval == 0.05
+    cfg = load_config("T22-A70", numerics={"dx": 0.01, "cfl": 0.1}, output={"dt_output": 0.05})
+    assert cfg.numerics.dx == 0.01 and cfg.numerics.cfl == 0.1 and cfg.output.dt_output == 0.05
     with pytest.raises(ConfigError, match="numerics.dxx: unknown key"):
         load_config("T22-A70", numerics={"dxx": 0.01})
     with pytest.raises(ConfigError, match="^numerics: must be a mapping"):
@@ -101,10 +101,10 @@ def test_isph_section_overrides():
 
 # --- item 7: impossible inputs ------------------------------------------------------------------
 def test_isph_slope_steeper_than_friction_is_refused():
-    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < material.phi_deg = 25.5"):
+    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < material.phi_internal_deg = 25.5"):
         load_config({"case": "steep", "geometry": {"theta_deg": 30.0}})
-    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < wall.phi_wall_deg = 20.0"):
-        load_config({"case": "steep", "geometry": {"theta_deg": 22.0}, "wall": {"phi_wall_deg": 20.0}})
+    with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < wall.phi_basal_deg = 20.0"):
+        load_config({"case": "steep", "geometry": {"theta_deg": 22.0}, "wall": {"phi_basal_deg": 20.0}})
 
 
 def test_da_slope_steeper_than_basal_friction_is_refused():
@@ -354,6 +354,22 @@ def test_config_template_is_a_valid_config_of_the_stage(tmp_path, capsys, stage)
     assert data and "#" in text
     assert main(["config", "show", str(f), "--stage", stage]) == 0
     assert capsys.readouterr().out.count("\n") > 5
+
+
+def test_config_write_gives_the_yaml_the_workflow_rules_wrote_before(tmp_path, capsys):
+    """`granudep config write` (rules user_case_config, sensitivity_config): dotted keys in order,
+    YAML values (a quoted '123' stays a string), the same bytes as the rules' yaml.safe_dump."""
+    import yaml
+    from granudep.cli import main
+    out = tmp_path / "c.yaml"
+    assert main(["config", "write", "-o", str(out), "--set", "case='123'", "--set", "geometry.theta_deg=20",
+                 "--set", "geometry.L0=0.2", "--set", "wall.phi_basal_deg=23.5"]) == 0
+    assert out.read_text() == yaml.safe_dump({"case": "123", "geometry": {"theta_deg": 20, "L0": 0.2},
+                                              "wall": {"phi_basal_deg": 23.5}}, sort_keys=False)
+    assert load_config(out).wall.phi_basal_deg == 23.5
+    assert main(["config", "write", "-o", str(tmp_path / "c.txt"), "--set", "a=1"]) == 2
+    assert main(["config", "write", "-o", str(out)]) == 2
+    assert "give at least one --set" in capsys.readouterr().err
 
 
 def test_config_show_resolves_with_units_and_ranges(capsys):

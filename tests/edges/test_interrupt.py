@@ -188,7 +188,7 @@ def test_isph_cli_sigterm_one_line_and_partial_output(tmp_path):
     out = tmp_path / "T22-A70.nc"
     env = {**os.environ, "PYTHONPATH": str(Path(granudep.__file__).parents[1])}
     proc = subprocess.Popen([sys.executable, "-m", "granudep", "isph", "T22-A70", "--dx", "0.01", "--set",
-                             "output.progress_s=1e-9", "-o", str(out)], stderr=subprocess.PIPE, text=True, env=env)
+                             "output.progress_every_s=1e-9", "-o", str(out)], stderr=subprocess.PIPE, text=True, env=env)
     lines = []
     for line in proc.stderr:
         lines.append(line)

@@ -60,7 +60,7 @@ def test_fig5_and_claims_quote_the_one_failure_plane(tmp_path):
     """Particles in front of a plane 35° from the bed through the gate foot move at t = t_c (and have
     slumped by then): Fig 5's note and the claims scorecard quote isph.analysis.failure_plane_angle,
     from the horizontal (35° + θ within a layer's slope error)."""
-    from granudep import claims
+    from granudep.report import claims
     from granudep.isph.analysis import failure_plane_angle
     ds = syn.isph_run(dx=0.004)
     L0, dx = 0.2, 0.004

@@ -4,7 +4,7 @@ import pytest
 
 import synthetic_data as syn
 from granudep.cli import main
-from granudep.da_vs_reference import compare
+from granudep.report.da_vs_reference import compare
 from granudep.figures import runout
 
 PNG = b"\x89PNG\r\n\x1a\n"

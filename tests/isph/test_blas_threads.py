@@ -23,7 +23,7 @@ def test_a_run_resumed_from_a_state_pins_blas_too(monkeypatch):
 
     class Resume:
         def resume(self):
-            return RunState(s, Snapshots(), cfg.output.interval)
+            return RunState(s, Snapshots(), cfg.output.dt_output)
 
         def after_step(self, state, at_output):
             pass

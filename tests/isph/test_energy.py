@@ -33,7 +33,7 @@ def test_energy_terms():
 
 def _tiny(**kw):
     return load_config({"case": "tiny", "geometry": {"L0": 0.04, "H0": 0.04, "domain_length": 0.3},
-                        "numerics": {"dx": 0.01, "t_end": 0.02}, "output": {"progress_s": 1e9}}, **kw)
+                        "numerics": {"dx": 0.01, "t_end": 0.02}, "output": {"progress_every_s": 1e9}}, **kw)
 
 
 def test_energy_creation_stops_the_run_naming_time_and_step():

@@ -113,7 +113,7 @@ def test_solver_nan_rhs_falls_back_and_the_nan_then_stops_the_run(monkeypatch, t
     with pytest.raises(IsphBlowUp, match="non-finite"):
         run_isph("T22-A70", output=out, dx=0.01, t_end=0.05, **{"numerics.projection": "approximate"})
     import xarray as xr
-    ds = xr.open_dataset(out)
+    ds = xr.open_dataset(tmp_path / "nan.failed.nc")
     assert ds.attrs["status"].startswith("failed: non-finite")
     assert ds.attrs["linear_solver_fallbacks"] == 1
 

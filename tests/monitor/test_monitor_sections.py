@@ -170,8 +170,8 @@ def test_bad_input_is_refused_with_the_key():
     run = strip_run()
     with pytest.raises(ConfigError, match="monitor.width_factor: must be > 0"):
         monitor(run, width_factor=-1.0)
-    with pytest.raises(ConfigError, match="monitor.interface_threshold"):
-        monitor(run, interface_threshold=2.5)
+    with pytest.raises(ConfigError, match="monitor.divergence_threshold: must be > 0.0 and < 2.0"):
+        monitor(run, divergence_threshold=2.5)
     with pytest.raises(ConfigError, match="run.attrs.smoothing_length"):
         monitor(run.drop_attrs().assign_attrs({k: v for k, v in run.attrs.items() if k != "smoothing_length"}))
     with pytest.raises(ConfigError, match="x_inf: must be > L0"):

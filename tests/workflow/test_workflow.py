@@ -43,7 +43,7 @@ SCHEMA_REFUSALS = [
 ONE_LINE_REFUSALS = [
     ("isph: {dx: .nan}\n", "isph.dx: must be a finite number (got nan)"),
     ("user_cases: [{name: steep, theta_deg: 30, L0: 0.2, H0: 0.1}]\n",
-     "user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_deg = 25.5"),
+     "user_cases[0].theta_deg: isph run 'steep': geometry.theta_deg: must be < material.phi_internal_deg = 25.5"),
     ("user_cases: [{name: big, theta_deg: 20, L0: 7, H0: 0.1}]\n",
      "user_cases[0].L0: isph run 'big': geometry.L0: must be > 0.0 and <= 5.0 (got 7.0)"),
     ("da: {n_particles: 500000}\n", "da.n_particles: da run '1D-A30_deposition': numerics.n_particles: "
@@ -58,6 +58,9 @@ ONE_LINE_REFUSALS = [
      "isph.set.numerics.projection: isph run 'T10-A35': numerics.projection: must be one of"),
     ("isph: {set: {numerics.projection: approximate, wall.coulomb_normal: projection}}\n",
      "isph.set.wall.coulomb_normal: isph run 'T10-A35': wall.coulomb_normal: projection needs"),
+    # issue 15: an old key name is refused, naming the new one
+    ("isph: {set: {output.interval: 0.02}}\n",
+     "isph.set.output.interval: isph run 'T10-A35': output.interval: renamed to output.dt_output"),
 ]
 ISPH_SET = "isph: {set: {numerics.projection: approximate, wall.coulomb_normal: contact}}\n"
 YAML_1_2 = "isph: {dx: 5e-3}\n"

@@ -83,17 +83,25 @@ def isph_dx(case):
     return config["isph"]["dx_per_case"].get(case, config["isph"]["dx"])
 
 
-def isph_set_options():
-    """``--set KEY=VALUE`` for every entry of config ``isph.set`` (scheme options of every 2D run,
-    e.g. numerics.projection: adjoint_pair), values written as YAML scalars."""
+def set_options(mapping, prefix=""):
+    """``--set KEY=VALUE`` for every leaf of a (nested) mapping, keys dotted, values written as YAML
+    scalars (a name such as '123' stays a string), quoted for the shell."""
     import shlex
     import yaml
 
     out = []
-    for key, value in config["isph"].get("set", {}).items():
+    for key, value in mapping.items():
+        if isinstance(value, dict):
+            out.append(set_options(value, f"{prefix}{key}."))
+            continue
         text = yaml.safe_dump(value, default_flow_style=True).strip().removesuffix("...").strip()
-        out.append(f"--set {shlex.quote(f'{key}={text}')}")
-    return " ".join(out)
+        out.append(f"--set {shlex.quote(f'{prefix}{key}={text}')}")
+    return " ".join(o for o in out if o)
+
+
+def isph_set_options():
+    """The scheme options of every 2D run (config ``isph.set``, e.g. numerics.projection: adjoint_pair)."""
+    return set_options(config["isph"].get("set", {}))
 
 
 def isph_source(case):

@@ -151,7 +151,7 @@ rule compare:
 def _converged_runs():
     if not REFERENCE_EXTRA:
         return {}
-    from granudep.da_vs_reference import select_reference_runs
+    from granudep.report.da_vs_reference import select_reference_runs
     own = [f"{RESULTS}/isph/{REFERENCE_2D[c]}.nc" for c in DA_CASES]
     have = [p for p in own if os.path.exists(p)]
     chosen = select_reference_runs(REFERENCE_EXTRA + have, REFERENCE_DX)

@@ -4,26 +4,22 @@
 # (.{case}.ckpt); the rerun continues from it (--restart auto), bit-identically.
 
 
+from granudep.workflow_check import user_case_mapping
+
+
 rule user_case_config:
     """A user case from config `user_cases` as the YAML file the granudep CLIs read."""
     output:
         f"{RESULTS}/user_cases/{{case}}.yaml",
     params:
-        entry=lambda wc: USER_CASES[wc.case],
+        set=lambda wc: set_options(user_case_mapping(USER_CASES[wc.case])),
     log:
         f"{LOGS}/user_cases/{{case}}.log",
-    run:
-        import yaml
-
-        e = params.entry
-        text = yaml.safe_dump(
-            {"case": e["name"], "geometry": {"theta_deg": e["theta_deg"], "L0": e["L0"], "H0": e["H0"]}},
-            sort_keys=False,
-        )
-        with open(output[0], "w") as fh:
-            fh.write(text)
-        with open(log[0], "w") as fh:
-            fh.write(f"wrote {output[0]}\n")
+    benchmark:
+        f"{BENCH}/user_cases/{{case}}.tsv"
+    threads: 1
+    shell:
+        "granudep config write -o {output} {params.set} > {log} 2>&1"
 
 
 rule isph_run:

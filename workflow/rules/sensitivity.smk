@@ -9,11 +9,13 @@ SENS = config["sensitivity"]
 SENS_DIR = f"{RESULTS}/sensitivity"
 SENS_PARAMS = ("phi_internal_deg", "phi_basal_deg", "critical_speed", "divergence_threshold", "free_surface_threshold")
 SENS_RUNS = ["baseline"] + [f"{p}_{v}" for p in SENS_PARAMS for v in SENS.get(p, [])]
-# which config key of each stage a sensitivity parameter sets (plumbing only; defaults in the code)
-SENS_ISPH_KEYS = {"phi_internal_deg": ("material", "phi_deg"), "phi_basal_deg": ("wall", "phi_wall_deg"),
-                  "free_surface_threshold": ("numerics", "free_surface_threshold")}
-SENS_DA_KEYS = {"phi_internal_deg": ("material", "phi_internal_deg"), "phi_basal_deg": ("material", "phi_basal_deg")}
-SENS_MONITOR_OPTIONS = {"critical_speed": "--critical-speed", "divergence_threshold": "--interface-threshold"}
+# A parameter is set in every stage whose config has a key of that name (one name per quantity across
+# stages, granudep.config.overrides_mapping): the friction angles in the 2D and the DA runs, the ∇·r
+# threshold of the free surface in the 2D run, critical_speed and divergence_threshold in the monitor.
+from granudep.config import dotted_key, merge, overrides_mapping
+from granudep.da.config import DAConfig
+from granudep.isph.config import IsphConfig
+from granudep.monitor.config import MonitorConfig
 
 
 def sens_split(sens):
@@ -24,21 +26,25 @@ def sens_split(sens):
     return param, float(value)
 
 
-def sens_isph_run(sens):
-    """The 2D run a sensitivity run monitors: its own rerun for the friction angles, else the baseline."""
+def sens_sets(stage, sens):
+    """Whether {sens} changes a key of this stage's config (IsphConfig, DAConfig, MonitorConfig)."""
     param, _ = sens_split(sens)
-    return sens if param in SENS_ISPH_KEYS else "baseline"
+    return param is not None and dotted_key(stage, param) is not None
 
 
-def sens_override(keys, sens, case):
-    """The run's config: the paper case, or, with a changed material, a run of its own name
+def sens_isph_run(sens):
+    """The 2D run a sensitivity run monitors: its own rerun for a 2D key, else the baseline."""
+    return sens if sens_sets(IsphConfig, sens) else "baseline"
+
+
+def sens_override(stage, sens, case):
+    """The run's config: the paper case, or, with a changed key, a run of its own name
     (a paper case name stands for the paper's geometry and material; the stages refuse it)."""
+    if not sens_sets(stage, sens):
+        return {"case": case}
     param, value = sens_split(sens)
-    data = {"case": case}
-    if param in keys:
-        section, key = keys[param]
-        data = {"case": f"{case}-{sens}".replace(".", "p"), "geometry": PAPER_GEOMETRY[case], section: {key: value}}
-    return data
+    own = {"case": f"{case}-{sens}".replace(".", "p"), "geometry": PAPER_GEOMETRY[case]}
+    return merge(own, overrides_mapping(stage, {param: value}))
 
 
 def _paper_geometry(case):
@@ -65,22 +71,22 @@ rule sensitivity_config:
     wildcard_constraints:
         stage="isph|da",
     params:
-        data=lambda wc: sens_override(SENS_ISPH_KEYS, wc.sens, SENS["isph_case"])
-        if wc.stage == "isph"
-        else sens_override(SENS_DA_KEYS, wc.sens, SENS["da_case"]),
+        set=lambda wc: set_options(
+            sens_override(IsphConfig, wc.sens, SENS["isph_case"])
+            if wc.stage == "isph"
+            else sens_override(DAConfig, wc.sens, SENS["da_case"])
+        ),
     log:
         f"{LOGS}/sensitivity/config/{{stage}}_{{sens}}.log",
-    run:
-        import yaml
-
-        with open(output[0], "w") as fh:
-            fh.write(yaml.safe_dump(params.data, sort_keys=False))
-        with open(log[0], "w") as fh:
-            fh.write(f"wrote {output[0]}\n")
+    benchmark:
+        f"{BENCH}/sensitivity/config/{{stage}}_{{sens}}.tsv"
+    threads: 1
+    shell:
+        "granudep config write -o {output} {params.set} > {log} 2>&1"
 
 
 # The chain isph -> monitor -> regress -> da is the main rules (isph.smk, monitor.smk, regress.smk,
-# da.smk) with the run's config file, the sensitivity dx and the monitor option of {sens}.
+# da.smk) with the run's config file, the sensitivity dx and the monitor key of {sens}.
 
 
 use rule isph_run as sensitivity_isph with:
@@ -101,7 +107,7 @@ use rule isph_run as sensitivity_isph with:
 
 def sens_monitor_options(wc):
     param, value = sens_split(wc.sens)
-    return f"{SENS_MONITOR_OPTIONS[param]} {value}" if param in SENS_MONITOR_OPTIONS else ""
+    return f"--set {param}={value}" if sens_sets(MonitorConfig, wc.sens) else ""
 
 
 use rule monitor as sensitivity_monitor with:

@@ -25,7 +25,7 @@ rule summary:
         html=report(f"{RESULTS}/summary.html", category="Summary"),
         # our numbers quoted by the report captions (read back in common.smk)
         captions=f"{RESULTS}/caption_numbers.json",
-        # the claims scorecard (granudep.claims): every quantitative claim of the paper vs ours
+        # the claims scorecard (granudep.report.claims): every quantitative claim of the paper vs ours
         claims=f"{RESULTS}/claims.csv",
     params:
         regression=f"{RESULTS}/regression",

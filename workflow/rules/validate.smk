@@ -73,16 +73,14 @@ def _validation_jobs():
     for sens in SENS_RUNS:
         param, _ = sens_split(sens)
         key = ("sensitivity", param, SENS[param].index(sens_split(sens)[1])) if param else ("sensitivity", "isph_case")
-        if param in SENS_ISPH_KEYS or param is None:
-            jobs.append(isph_job(f"sensitivity isph run {sens!r}", sens_override(SENS_ISPH_KEYS, sens, SENS["isph_case"]),
+        if sens_sets(IsphConfig, sens) or param is None:
+            jobs.append(isph_job(f"sensitivity isph run {sens!r}", sens_override(IsphConfig, sens, SENS["isph_case"]),
                                  key, {"numerics.dx": ("sensitivity", "dx"), **_isph_set_keys()}, dx=SENS["dx"],
                                  **config["isph"].get("set", {})))
-        opts = {}
-        if param in SENS_MONITOR_OPTIONS:
-            opts = {{"critical_speed": "critical_speed", "divergence_threshold": "interface_threshold"}[param]: sens_split(sens)[1]}
+        opts = {param: sens_split(sens)[1]} if sens_sets(MonitorConfig, sens) else {}
         jobs.append(monitor_job(f"sensitivity monitor {sens!r}", key, {}, width_factor=config["monitor"]["width_factor"],
                                 **opts))
-        jobs.append(da_job(f"sensitivity da run {sens!r}", sens_override(SENS_DA_KEYS, sens, SENS["da_case"]), key,
+        jobs.append(da_job(f"sensitivity da run {sens!r}", sens_override(DAConfig, sens, SENS["da_case"]), key,
                            {"numerics.n_particles": ("da", "n_particles")}, True, n_particles=config["da"]["n_particles"],
                            ab_source="computed", coefficients=f"{SENS_DIR}/regression/{sens}/coefficients.csv"))
     return jobs

@@ -4,8 +4,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..cliutil import (add_checkpoint_args, add_run_args, apply_threads, checkpoint_path, interrupted_path,
-                       parse_sets, restart_file)
+from ..cliutil import (add_checkpoint_args, add_run_args, apply_threads, checkpoint_path, failed_path,
+                       interrupted_path, parse_sets, restart_file)
 from ..io import write_netcdf
 from ..progress import LOG
 
@@ -47,7 +47,7 @@ def _run(args) -> int:
     except DARunError as exc:
         LOG.error("%s", exc)
         if exc.dataset is not None:
-            failed = out.with_name(out.stem + ".failed.nc")
+            failed = failed_path(out)
             write_netcdf(exc.dataset, failed)
             LOG.error("outputs written until the failure: %s", failed)
         return 1

@@ -6,14 +6,13 @@ overrides, and checks every key and range before any work starts (one-line ``Con
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal, Mapping
+from typing import Literal, Mapping
 
 from ..cases import check_case_name, material, momentum_scale, table5
-from ..config import ConfigError, build, load_yaml, merge, param
+from ..config import ConfigError, build, config_data, merge, param
 from .path import PathGeometry, anchor_path_file
 
 _GLASS = material("glass_beads")
@@ -176,18 +175,6 @@ class DAConfig:
         return momentum_scale(self.geometry.H0, self.theta)
 
 
-SECTIONS = ("geometry", "material", "numerics", "deposition", "output")
-
-
-def _leaf_index() -> dict[str, str]:
-    """Unique leaf key -> section (for flat overrides such as ``n_particles=500``)."""
-    seen: dict[str, list[str]] = {}
-    for sec, cls in zip(SECTIONS, (Geometry, Material, Numerics, Deposition, Output)):
-        for f in dataclasses.fields(cls):
-            seen.setdefault(f.name, []).append(sec)
-    return {k: v[0] for k, v in seen.items() if len(v) == 1}
-
-
 def case_mapping(name: str) -> dict:
     """Config mapping of a Table 5 case (geometry, friction angles, the paper's A and B)."""
     t5 = table5()
@@ -200,51 +187,19 @@ def case_mapping(name: str) -> dict:
             "material": {"phi_internal_deg": float(r.phi_internal_deg), "phi_basal_deg": float(r.phi_basal_deg)}}
 
 
-def overrides_mapping(overrides: Mapping[str, Any]) -> dict:
-    """Turn ``run_da`` keyword overrides (section dicts or unique leaf names) into a nested mapping."""
-    leaf = _leaf_index()
-    out: dict = {}
-    for key, value in overrides.items():
-        if value is None:
-            continue
-        if key in SECTIONS:
-            if not isinstance(value, Mapping):
-                raise ConfigError(f"{key}: must be a mapping")
-            out = merge(out, {key: dict(value)})
-        elif key == "case":
-            out["case"] = value
-        elif "." in key and key.split(".", 1)[0] in SECTIONS:  # numerics.cfl=0.3
-            sec, leaf_key = key.split(".", 1)
-            out = merge(out, {sec: {leaf_key: value}})
-        elif key in leaf:
-            out = merge(out, {leaf[key]: {key: value}})
-        else:
-            raise ConfigError(f"{key}: unknown override (allowed: a section {list(SECTIONS)} or a unique key "
-                              f"such as n_particles, cfl, x_inf_mode)")
-    return out
+def _paper_case(name: str) -> dict | None:
+    return case_mapping(name) if name in set(table5().case_id) else None
 
 
 def resolve(case_or_config: str | Path | Mapping | DAConfig, deposition: bool | Mapping | None = None,
             **overrides) -> DAConfig:
-    """Build the validated ``DAConfig`` from a case name, YAML path or mapping plus overrides."""
-    if isinstance(case_or_config, DAConfig):
-        base: dict = dataclasses.asdict(case_or_config)
-    elif isinstance(case_or_config, Mapping):
-        base = dict(case_or_config)
-        if isinstance(base.get("case"), str) and base["case"] in set(table5().case_id):
-            base = merge(case_mapping(base["case"]), base)
-    elif isinstance(case_or_config, (str, Path)) and (str(case_or_config).endswith((".yaml", ".yml"))
-                                                      or Path(case_or_config).is_file()):
-        base = anchor_path_file(load_yaml(case_or_config), case_or_config)
-        if "case" not in base:
-            base["case"] = Path(case_or_config).stem
-        if isinstance(base.get("case"), str) and base["case"] in set(table5().case_id):
-            base = merge(case_mapping(base["case"]), base)
-    elif isinstance(case_or_config, str):
-        base = case_mapping(case_or_config)
-    else:
-        raise ConfigError(f"case: expected a case name, YAML path or mapping (got {type(case_or_config).__name__})")
-    data = merge(base, overrides_mapping(overrides))
+    """Build the validated ``DAConfig`` from a case name, YAML path or mapping plus overrides.
+
+    The one loader and override rule of every stage (:func:`granudep.config.config_data`);
+    ``deposition`` (true/false or the section's mapping) is merged last.
+    """
+    data = config_data(DAConfig, case_or_config, overrides, paper_case=_paper_case, case_mapping=case_mapping,
+                       on_file=anchor_path_file, example="n_particles, cfl, x_inf_mode")
     if isinstance(deposition, Mapping):  # run_da(..., deposition={"ab_source": "user", ...}): the section
         data = merge(data, {"deposition": {"enabled": True, **dict(deposition)}})
     elif deposition is not None:

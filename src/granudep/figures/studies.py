@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..da_vs_reference import reference_row
+from ..report.da_vs_reference import reference_row
 from ..config import ConfigError
 from .common import add_inputs, case_of, classify, hide_unused, load, load_table, new_figure, note, panel_label, register
 

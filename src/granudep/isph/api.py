@@ -37,8 +37,9 @@ def run_isph(case_or_config: Any, output: str | Path | None = None, progress: An
 
     ``overrides`` name config fields (``dx=0.008``, ``t_end=1.0``, ``wall.slip="no_slip"``) or
     whole sections (``numerics={"dx": 0.008}``). With ``output`` the dataset is written there
-    (atomically; the path is checked before the run), also when the run blows up: then the
-    snapshots so far are written with ``status = "failed: ..."`` and IsphBlowUp is re-raised.
+    (atomically; the path is checked before the run); when the run blows up, the snapshots so far
+    go to ``NAME.failed.nc`` beside it (as a failed DA run's do), with ``status = "failed: ..."``,
+    and IsphBlowUp is re-raised.
     ``progress``: None/"auto" (a tqdm bar in a terminal or notebook, plain log lines otherwise),
     "log", "bar", False (silent). Bad input raises ConfigError before any work.
 
@@ -61,7 +62,7 @@ def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any 
     LOG.info("isph %s: theta=%.1f deg, L0=%.3f m, H0=%.3f m, dx=%.4f m, t_end=%.3f s (%.1f t_c), slip=%s",
              cfg.case, cfg.geometry.theta_deg, cfg.geometry.L0, cfg.geometry.H0, cfg.numerics.dx, cfg.t_end,
              cfg.t_end / cfg.t_c, cfg.wall.slip)
-    prog = make_progress(progress, cfg.output.progress_s, total=cfg.t_end, on_stop=_stop(cfg), desc=f"isph {cfg.case}")
+    prog = make_progress(progress, cfg.output.progress_every_s, total=cfg.t_end, on_stop=_stop(cfg), desc=f"isph {cfg.case}")
     try:
         solver, snaps, status, ttr = run(cfg, on_snapshot=lambda s, snaps: prog.update(s.t), progress=prog,
                                          checkpoint=ckpt)
@@ -74,8 +75,8 @@ def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any 
                            float("nan"))
         exc.dataset = ds
         if output is not None:
-            from ..cliutil import interrupted_path
-            path = interrupted_path(output) if interrupted else output
+            from ..cliutil import failed_path, interrupted_path
+            path = interrupted_path(output) if interrupted else failed_path(output)  # as the DA: never the final name
             write_netcdf(ds, path)
             exc.output = path
             (LOG.info if interrupted else LOG.error)(  # the CLI's one error line says it for a stop
@@ -100,7 +101,7 @@ def run_config(cfg: IsphConfig, output: str | Path | None = None, progress: Any 
 def warmup() -> None:
     """Compile (and cache) every numba kernel with a few steps of a tiny collapse."""
     cfg = load_config({"case": "warmup", "geometry": {"L0": 0.04, "H0": 0.04, "domain_length": 0.2},
-                       "numerics": {"dx": 0.01, "t_end": 0.01}, "output": {"progress_s": 1e9}})
+                       "numerics": {"dx": 0.01, "t_end": 0.01}, "output": {"progress_every_s": 1e9}})
     run(cfg, progress=Progress(1e9))
     for slip in ("no_slip",):
         run(load_config(cfg, **{"wall.slip": slip}), progress=Progress(1e9))

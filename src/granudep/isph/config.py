@@ -2,19 +2,18 @@
 
 Sections (YAML keys): ``case``, ``geometry``, ``material``, ``rheology``, ``wall``, ``numerics``,
 ``output``. Every field is range-checked by :func:`granudep.config.build`; cross-field checks are in
-``validate``. Overrides may name a field by its dotted key (``numerics.dx``) or, when unique, by its
-bare name (``dx``).
+``validate``. Overrides follow the one rule of every stage (:func:`granudep.config.overrides_mapping`):
+a section mapping, a dotted key (``numerics.dx``) or, when unique, a bare name (``dx``).
 """
 from __future__ import annotations
 
 import dataclasses
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from ..cases import characteristic_time, check_case_name, material as table2_material, table1, table5
-from ..config import ConfigError, build, load_yaml, merge, param
+from ..config import ConfigError, build, config_data, param
 
 _GB = table2_material("glass_beads")
 
@@ -48,19 +47,19 @@ class Material:
     d: float = param(_GB["d"], gt=0.0, lt=0.1, unit="m", doc="grain diameter (Table 2)")
     rho_s: float = param(_GB["rho_s"], gt=0.0, unit="kg m-3", doc="grain density (Table 2)")
     rho: float = param(_GB["rho"], gt=0.0, unit="kg m-3", doc="bulk density of the continuum (Table 2)")
-    phi_deg: float = param(_GB["phi_deg"], gt=0.0, lt=90.0, unit="deg",
-                           doc="internal friction angle; mu_s = tan(phi)")
+    phi_internal_deg: float = param(_GB["phi_internal_deg"], gt=0.0, lt=90.0, unit="deg", was="phi_deg",
+                                    doc="internal friction angle phi_I; mu_s = tan(phi_I)")
     mu_2: float = param(0.73, gt=0.0, unit="1", doc="limiting friction at large I (paper: 'mu_s ~ 0.73')")
     I0: float = param(0.279, gt=0.0, unit="1", doc="inertial-number scale (Ionescu et al. 2015)")
 
     @property
     def mu_s(self) -> float:
-        return math.tan(math.radians(self.phi_deg))
+        return math.tan(math.radians(self.phi_internal_deg))
 
     def validate(self, prefix: str) -> None:
         p = f"{prefix}." if prefix else ""
         if self.mu_2 <= self.mu_s:
-            raise ConfigError(f"{p}mu_2: must be > mu_s = tan(phi_deg) = {self.mu_s:.4f} (got {self.mu_2})")
+            raise ConfigError(f"{p}mu_2: must be > mu_s = tan(phi_internal_deg) = {self.mu_s:.4f} (got {self.mu_2})")
         if self.rho > self.rho_s:
             raise ConfigError(f"{p}rho: must be <= rho_s = {self.rho_s} (got {self.rho})")
 
@@ -103,8 +102,8 @@ class Wall:
     slip: str = param("coulomb", choices=("no_slip", "navier", "free_slip", "coulomb"),
                       doc="basal/back-wall condition for the viscous stress")
     slip_length: float = param(0.0, ge=0.0, unit="m", doc="Navier slip length b (slip = navier)")
-    phi_wall_deg: float = param(_GB["phi_deg"], gt=0.0, lt=90.0, unit="deg",
-                                doc="Coulomb wall friction angle phi_B (slip = coulomb)")
+    phi_basal_deg: float = param(_GB["phi_internal_deg"], gt=0.0, lt=90.0, unit="deg", was="phi_wall_deg",
+                                 doc="Coulomb wall friction angle phi_B (slip = coulomb)")
     stick_speed: float = param(1.0e-4, gt=0.0, unit="m s-1",
                                doc="Coulomb regularisation: below this tangential speed the wall friction is a stiff drag")
     contact_length: str = param("voronoi", choices=("voronoi", "dx"),
@@ -121,6 +120,11 @@ class Wall:
                                     "numerics.projection: adjoint_pair, whose walls carry pressure); auto: "
                                     "projection with adjoint_pair, contact with the approximate projection")
     layers: int = param(0, ge=0, le=8, doc="wall particle layers; 0 = enough to cover the kernel support 2h")
+
+    @property
+    def phi_wall_deg(self) -> float:
+        """The old name, read by isph/solver.py and isph/verification.py (not a config key)."""
+        return self.phi_basal_deg
 
 
 @dataclass(frozen=True)
@@ -191,7 +195,7 @@ class Numerics:
 
 @dataclass(frozen=True)
 class Output:
-    interval: float = param(0.01, gt=0.0, unit="s", doc="snapshot interval")
+    dt_output: float = param(0.01, gt=0.0, unit="s", was="interval", doc="interval between stored snapshots")
     front_depth_threshold: float | None = param(None, gt=0.0, unit="m",
                                                 doc="front: first cell thinner than this; null = 2 d")
     rest_speed: float = param(0.1, gt=0.0, unit="m s-1",
@@ -202,7 +206,16 @@ class Output:
                                   "speed of those behind the front ...")
     rest_duration: float = param(0.1, gt=0.0, unit="s", doc="... for this long")
     stop_at_rest: bool = param(True, doc="end the run once at rest")
-    progress_s: float = param(5.0, gt=0.0, unit="s", doc="wall seconds between progress lines")
+    progress_every_s: float = param(5.0, gt=0.0, unit="s", was="progress_s", doc="wall seconds between progress lines")
+
+    # the old names, read by isph/solver.py (not a config key: `output.interval` is refused)
+    @property
+    def interval(self) -> float:
+        return self.dt_output
+
+    @property
+    def progress_s(self) -> float:
+        return self.progress_every_s
 
 
 @dataclass(frozen=True)
@@ -221,9 +234,9 @@ class IsphConfig:
         _check_paper_identity(self)
         if g.periodic_length == 0:
             # a column on a bed comes to rest only if the slope is below the friction angles
-            limits = [(self.material.phi_deg, "material.phi_deg")]
+            limits = [(self.material.phi_internal_deg, "material.phi_internal_deg")]
             if self.wall.slip == "coulomb":
-                limits.append((self.wall.phi_wall_deg, "wall.phi_wall_deg"))
+                limits.append((self.wall.phi_basal_deg, "wall.phi_basal_deg"))
             phi, key = min(limits)
             if g.theta_deg >= phi:
                 raise ConfigError(f"geometry.theta_deg: must be < {key} = {phi} for a column on a bed "
@@ -273,7 +286,7 @@ class IsphConfig:
 
     @property
     def wall_friction(self) -> float:
-        return math.tan(math.radians(self.wall.phi_wall_deg))
+        return math.tan(math.radians(self.wall.phi_basal_deg))
 
     @property
     def wall_layers(self) -> int:
@@ -316,7 +329,7 @@ def _check_paper_identity(cfg: "IsphConfig") -> None:
     changed = [(f"geometry.{k}", getattr(cfg.geometry, k), v) for k, v in ref_geo.items()
                if not math.isclose(getattr(cfg.geometry, k), v, rel_tol=1e-9, abs_tol=1e-12)]
     for sec, obj, ref in (("material", cfg.material, Material()), ("wall", cfg.wall, Wall())):
-        keys = [f.name for f in dataclasses.fields(ref)] if sec == "material" else ["phi_wall_deg"]
+        keys = [f.name for f in dataclasses.fields(ref)] if sec == "material" else ["phi_basal_deg"]
         changed += [(f"{sec}.{k}", getattr(obj, k), getattr(ref, k)) for k in keys
                     if getattr(obj, k) != getattr(ref, k)]
     if changed:
@@ -326,70 +339,16 @@ def _check_paper_identity(cfg: "IsphConfig") -> None:
                           f"letters, digits, '_' and '-')")
 
 
-def _field_index() -> dict[str, list[str]]:
-    idx: dict[str, list[str]] = {}
-    for sec in dataclasses.fields(IsphConfig):
-        tp = {"geometry": Geometry, "material": Material, "rheology": Rheology, "wall": Wall,
-              "numerics": Numerics, "output": Output}.get(sec.name)
-        if tp is None:
-            idx.setdefault(sec.name, []).append(sec.name)
-            continue
-        for f in dataclasses.fields(tp):
-            idx.setdefault(f.name, []).append(f"{sec.name}.{f.name}")
-    return idx
-
-
-def _apply_overrides(data: dict, overrides: Mapping[str, Any]) -> dict:
-    idx = _field_index()
-    out = dict(data)
-    sections = {f.name for f in dataclasses.fields(IsphConfig)} - {"case"}
-    for key, value in overrides.items():
-        if value is None:
-            continue
-        if key in sections:  # a whole section: run_isph(..., numerics={"dx": 0.01})
-            if not isinstance(value, Mapping):
-                raise ConfigError(f"{key}: must be a mapping of {key} keys (got {type(value).__name__} {value!r})")
-            out = merge(out, {key: dict(value)})
-            continue
-        dotted = key if "." in key else None
-        if dotted is None:
-            where = idx.get(key)
-            if not where:
-                raise ConfigError(f"{key}: unknown override (allowed: a section {sorted(sections)}, "
-                                  f"section.key or a unique key such as dx, t_end, theta_deg)")
-            if len(where) > 1:
-                raise ConfigError(f"{key}: ambiguous override (use one of {', '.join(where)})")
-            dotted = where[0]
-        parts = dotted.split(".")
-        node = out
-        for p in parts[:-1]:
-            node[p] = dict(node.get(p) or {})
-            node = node[p]
-        node[parts[-1]] = value
-    return out
+def _paper_case(name: str) -> dict | None:
+    return {"geometry": case_geometry(name)} if name in case_names() else None
 
 
 def load_config(case_or_config: Any, **overrides) -> IsphConfig:
-    """Case name, YAML path, mapping or IsphConfig (+ overrides) -> validated IsphConfig."""
-    if isinstance(case_or_config, IsphConfig):
-        data = _asdict(case_or_config)
-    elif isinstance(case_or_config, Mapping):
-        data = dict(case_or_config)
-    elif isinstance(case_or_config, (str, Path)) and (str(case_or_config).endswith((".yaml", ".yml"))
-                                                      or Path(str(case_or_config)).is_file()):
-        data = load_yaml(case_or_config)
-        data.setdefault("case", Path(str(case_or_config)).stem)
-    elif isinstance(case_or_config, str):
-        data = {"case": case_or_config, "geometry": case_geometry(case_or_config)}
-    else:
-        raise ConfigError(f"case: must be a case name, YAML path or mapping (got {case_or_config!r})")
-    if isinstance(data.get("case"), str) and data["case"] in case_names() and not isinstance(case_or_config, IsphConfig):
-        # a YAML naming a paper case inherits its geometry unless it sets one
-        data = merge({"geometry": case_geometry(data["case"])}, data)
-    data = _apply_overrides(data, overrides)
-    return build(IsphConfig, data)
+    """Case name, YAML path, mapping or IsphConfig (+ overrides) -> validated IsphConfig.
 
-
-def _asdict(cfg) -> dict:
-    from ..config import to_dict
-    return to_dict(cfg)
+    The one loader and override rule of every stage (:func:`granudep.config.config_data`): a YAML or
+    mapping naming a paper case inherits its geometry unless it sets one.
+    """
+    return build(IsphConfig, config_data(IsphConfig, case_or_config, overrides, paper_case=_paper_case,
+                                         case_mapping=lambda name: {"case": name, "geometry": case_geometry(name)},
+                                         example="dx, t_end, theta_deg"))

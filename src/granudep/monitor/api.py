@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from .. import cases
-from ..config import ConfigError, build, to_yaml
+from ..config import ConfigError, flat_config, to_yaml
 from ..io import open_dataset, provenance, var
 from ..progress import LOG, Progress
 from .config import MonitorConfig
@@ -39,7 +39,7 @@ def _load(run) -> xr.Dataset:
 def _config(overrides: dict) -> MonitorConfig:
     if "wm_factors" in overrides and overrides["wm_factors"] is not None:
         overrides = {**overrides, "wm_factors": list(overrides["wm_factors"])}
-    return build(MonitorConfig, {k: v for k, v in overrides.items() if v is not None}, prefix="monitor")
+    return flat_config(MonitorConfig, overrides=overrides, prefix="monitor")
 
 
 def _geometry(run: xr.Dataset, cfg: MonitorConfig) -> dict:
@@ -111,7 +111,7 @@ def _analyse(run: xr.Dataset, cfg: MonitorConfig, g: dict, width_factors) -> dic
         speed = np.hypot(U[it], V[it])
         dep = speed < cfg.critical_speed
         divr = divr_deposited(X[it], Y[it], dep, g["particle_volume"], g["smoothing_length"], cfg.bed_mirror)
-        cand = dep & (divr < cfg.interface_threshold) & ~FS[it]
+        cand = dep & (divr < cfg.divergence_threshold) & ~FS[it]
         for w in width_factors:
             sums = section_reduce(X[it], Y[it], U[it], dep, cand, float(centres[0]), spacing,
                                   0.5 * w * g["dx"], n_sec)
@@ -163,7 +163,7 @@ def _base_dataset(run: xr.Dataset, cfg: MonitorConfig, g: dict, width: float) ->
                     smoothing_length=g["smoothing_length"], particle_volume=g["particle_volume"],
                     x_inf=g["x_inf"], t_c=g["t_c"], p0=g["p0"], n_sections=cfg.n_sections,
                     width_factor=float(width), section_width=float(width) * g["dx"],
-                    critical_speed=cfg.critical_speed, interface_threshold=cfg.interface_threshold,
+                    critical_speed=cfg.critical_speed, divergence_threshold=cfg.divergence_threshold,
                     y_bed=0.0, depth_frame="slope-aligned: y bed-normal, no 1/cos(theta) in eq 17")
     if "title" in run.attrs:
         ds.attrs["source_title"] = str(run.attrs["title"])

@@ -1,9 +1,11 @@
 """``granudep monitor`` and ``granudep monitor-wm``: section time series of a 2D ISPH run."""
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 from ..cliutil import add_run_args, apply_threads, parse_sets
+from ..config import ConfigError
 from ..io import write_netcdf
 from ..progress import LOG
 
@@ -12,8 +14,9 @@ def _common(p) -> None:
     p.add_argument("run", help="2D ISPH run file (results/isph/{case}.nc)")
     p.add_argument("--critical-speed", type=float, default=None, metavar="V",
                    help="|v| below which a particle is deposited, m/s (default 0.1)")
-    p.add_argument("--interface-threshold", type=float, default=None, metavar="T",
+    p.add_argument("--divergence-threshold", type=float, default=None, metavar="T",
                    help="eq 16 threshold on div r over deposited neighbours (default 1.6)")
+    p.add_argument("--interface-threshold", type=float, default=None, help=argparse.SUPPRESS)  # old name: refused
     p.add_argument("--x-inf", type=float, default=None, metavar="X",
                    help="final runout x_inf in m from the back wall (default: the run's final_front_position)")
     p.add_argument("--n-sections", type=int, default=None, metavar="N", help="number of sections (default 11)")
@@ -21,9 +24,11 @@ def _common(p) -> None:
 
 
 def _overrides(args) -> dict:
-    sets = {k.removeprefix("monitor."): v for k, v in parse_sets(args.set).items()}
-    return {"critical_speed": args.critical_speed, "interface_threshold": args.interface_threshold,
-            "x_inf": args.x_inf, "n_sections": args.n_sections, **sets}
+    if args.interface_threshold is not None:
+        raise ConfigError("--interface-threshold: renamed to --divergence-threshold (monitor.divergence_threshold; "
+                          "one name per quantity across stages)")
+    return {"critical_speed": args.critical_speed, "divergence_threshold": args.divergence_threshold,
+            "x_inf": args.x_inf, "n_sections": args.n_sections, **parse_sets(args.set)}
 
 
 def _prepare(args, default_dir: str, overrides: dict):

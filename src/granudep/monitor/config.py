@@ -19,9 +19,9 @@ class MonitorConfig:
                                 doc="section width W_M in units of the run's particle spacing dx (paper: 2)")
     critical_speed: float = param(0.1, gt=0.0, unit="m/s",
                                   doc="|v| below which a particle counts as deposited (paper: 0.1 m/s)")
-    interface_threshold: float = param(1.6, gt=0.0, lt=2.0, unit="1",
-                                       doc="eq 16: a deposited particle with (div r) over deposited "
-                                           "neighbours below this is an F/D interface particle (paper: 1.6)")
+    divergence_threshold: float = param(1.6, gt=0.0, lt=2.0, unit="1", was="interface_threshold",
+                                        doc="eq 16: a deposited particle with (div r) over deposited "
+                                            "neighbours below this is an F/D interface particle (paper: 1.6)")
     bed_mirror: bool = param(True, doc="count mirror images of deposited particles below the bed y = 0 "
                                        "in eq 16 (the rigid bed is at rest; the run holds no wall particles)")
     x_inf: float | None = param(None, gt=0.0, unit="m",

@@ -8,7 +8,7 @@ import pandas as pd
 import xarray as xr
 import yaml
 
-from ..config import ConfigError, build, to_dict
+from ..config import ConfigError, flat_config, to_dict
 from ..io import open_dataset, provenance, write_netcdf, write_text
 from .coefficients import coefficient_table, coefficients_dataset
 from .paper_tables import table3_comparison, table5_comparison
@@ -32,7 +32,7 @@ def regress(sections, **overrides) -> dict:
     """Run the regression over section datasets (or paths). Returns a dict with DataFrames
     ``critical``, ``coefficients``, ``table3``, ``table5``, the Dataset ``coefficients_nc`` and
     ``config``."""
-    cfg = build(RegressConfig, {k: v for k, v in overrides.items() if v is not None}, prefix="regress")
+    cfg = flat_config(RegressConfig, overrides=overrides, prefix="regress")
     if isinstance(sections, (str, Path, xr.Dataset)):
         sections = [sections]
     if not sections:

@@ -12,7 +12,7 @@ def _cmd_regress(args) -> int:
     from .api import regress, write_outputs
     check_output_dir(args.output)  # before any work
     over = {"onset_depth_factor": args.onset_depth_factor, "fit_x_min": args.fit_x_min, "fit_x_max": args.fit_x_max,
-            **{k.removeprefix("regress."): v for k, v in parse_sets(args.set).items()}}
+            **parse_sets(args.set)}
     result = regress(args.sections, **over)
     paths = write_outputs(result, args.output)
     with pd.option_context("display.width", 200, "display.max_columns", 30, "display.max_rows", 200):

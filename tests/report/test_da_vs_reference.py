@@ -7,7 +7,7 @@ import pytest
 import synthetic_data as syn
 from granudep import cases
 from granudep.cli import main
-from granudep.da_vs_reference import compare, improvement, load_reference, max_errors, reference_from_isph, report_text
+from granudep.report.da_vs_reference import compare, improvement, load_reference, max_errors, reference_from_isph, report_text
 from granudep.config import ConfigError
 
 

@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .io import open_dataset
-from .progress import LOG
+from ..io import open_dataset
+from ..progress import LOG
 
 CLAIM_COLUMNS = ["claim_id", "claim", "case", "paper_value", "unit", "ours_paper_res", "ours_converged",
                  "converged_dx_mm", "verdict", "basis", "test", "tolerance", "note", "source", "our_source"]
@@ -94,7 +94,7 @@ def _failure_angle(path) -> tuple[float, float]:
     """Failure-plane inclination from the *horizontal* (Rankine's θ_F = 45° + φ/2 is measured from the
     horizontal, the major principal stress in the column being vertical): the one definition of
     `isph.analysis.failure_plane_angle` (the verification table and Fig 5 use it too)."""
-    from .isph.analysis import failure_plane_angle
+    from ..isph.analysis import failure_plane_angle
     with open_dataset(path) as ds:
         fp = failure_plane_angle(ds, t_norm=1.0)
         return fp["angle_horizontal_deg"], float(ds.attrs.get("dx", math.nan))
@@ -149,7 +149,7 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
     # --- Table 3 ---------------------------------------------------------------------------------
     t3 = _read(root / "regression" / "table3_comparison.csv")
     t3c = _read(creg / "table3_comparison.csv") if creg else None
-    from .cases import table3
+    from ..cases import table3
     for _, p in table3().iterrows():
         for xm in (0.2, 0.4, 0.6, 0.8):
             ours = fit = conv = float("nan")
@@ -176,7 +176,7 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
     # --- Table 5 ---------------------------------------------------------------------------------
     t5 = _read(root / "regression" / "table5_comparison.csv")
     t5c = _read(creg / "table5_comparison.csv") if creg else None
-    from .cases import table5
+    from ..cases import table5
     for _, p in table5().iterrows():
         for q in ("A", "B"):
             ours = conv = r2 = alt = float("nan")

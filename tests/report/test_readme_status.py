@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from granudep.cli import main
-from granudep.readme_status import BEGIN, END, status_block, update_readme
+from granudep.report.readme_status import BEGIN, END, status_block, update_readme
 
 README = f"# x\n\nHand-written text (t_s = 14.6, keep).\n\n{BEGIN}\nold numbers\n{END}\n\n## After\n\nmore text\n"
 
@@ -82,5 +82,5 @@ def test_readme_without_markers_is_refused(tmp_path, results, capsys):
 
 def test_project_readme_has_one_block():
     from pathlib import Path
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    text = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
     assert text.count(BEGIN) == 1 and text.count(END) == 1

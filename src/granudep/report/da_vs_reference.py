@@ -30,11 +30,11 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from . import cases
-from .config import ConfigError
-from .front import flow_time as _flow_time
-from .io import open_dataset
-from .progress import LOG
+from .. import cases
+from ..config import ConfigError
+from ..front import flow_time as _flow_time
+from ..io import open_dataset
+from ..progress import LOG
 
 #: the maximum relative errors the paper states in Section 4.3 (vs Farin et al. 2014 measurements)
 PAPER_MAX_ERRORS = {

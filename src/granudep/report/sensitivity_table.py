@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from .config import ConfigError
+from ..config import ConfigError
 
 
 def one_run(coefficients: str | Path, da: str | Path) -> dict:
@@ -67,7 +67,7 @@ def _pairs(items: list[str], what: str) -> list[tuple[str, str]]:
 
 
 def _cmd(args) -> int:
-    from .io import check_output, write_text
+    from ..io import check_output, write_text
     check_output(args.output, suffixes=(".csv",))
     try:
         baseline_values = {k: float(v) for k, v in _pairs(args.baseline_values, "--baseline-values")}

@@ -7,10 +7,10 @@ import pandas as pd
 import pytest
 
 import synthetic_data as syn
-from granudep.claims import paper_claims, scorecard, verdict
-from granudep.da_vs_reference import (compare, da_reading, matrix_maxima, reading_matrix, reference_from_isph,
+from granudep.report.claims import paper_claims, scorecard, verdict
+from granudep.report.da_vs_reference import (compare, da_reading, matrix_maxima, reading_matrix, reference_from_isph,
                               select_reference_runs)
-from granudep.da_vs_reference import PAPER_MAX_ERRORS
+from granudep.report.da_vs_reference import PAPER_MAX_ERRORS
 from granudep.da.deposition import self_consistent
 
 

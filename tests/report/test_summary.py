@@ -4,8 +4,9 @@ import pytest
 
 import synthetic_data as syn
 from granudep.cli import main
-from granudep.da_vs_reference import compare
-from granudep.report import build_summary, md_table
+from granudep.report.da_vs_reference import compare
+from granudep.report.markdown import md_table
+from granudep.report.summary import build_summary
 
 
 @pytest.fixture()
@@ -106,7 +107,7 @@ def test_summary_study_sections_read_the_runs(tmp_path):
     assert "| T22-A70_dx0.004 | 4.0 | 1.900 |" in sec
     assert "runout +21.1 %" in sec                                   # (1.9 - 1.5)/1.9: 8 -> 4 mm now
     assert "| 1D-A70 | deposition | 1.700 | 1.750 |" in sec and "N=250" not in sec
-    from granudep.report import caption_numbers
+    from granudep.report.captions import caption_numbers
     (tmp_path / "results").mkdir()
     (tmp_path / "results" / "convergence").symlink_to(conv, target_is_directory=True)
     nums = caption_numbers(tmp_path / "results", convergence_dx=[0.008, 0.004])
@@ -118,7 +119,7 @@ def test_caption_numbers_from_outputs_and_rendered_in_captions(inputs, tmp_path)
     jinja2 = pytest.importorskip("jinja2")
     from pathlib import Path
     from types import SimpleNamespace
-    from granudep.report import caption_numbers
+    from granudep.report.captions import caption_numbers
     root = tmp_path / "results"
     (root / "compare").mkdir(parents=True)
     inputs["regression"].rename(root / "regression")

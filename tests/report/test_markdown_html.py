@@ -1,7 +1,7 @@
-"""granudep.markdown_html: the summary rendered for the Snakemake report."""
+"""granudep.report.markdown_html: the summary rendered for the Snakemake report."""
 from __future__ import annotations
 
-from granudep.markdown_html import inline, to_html
+from granudep.report.markdown_html import inline, to_html
 
 MD = """# Title
 

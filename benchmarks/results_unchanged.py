@@ -1,0 +1,90 @@
+"""Are the outputs of this checkout bit for bit those of another revision? (issue 15: structure and
+numerics in separate commits, the ISPH and DA outputs unchanged by each structural step)
+
+    python benchmarks/results_unchanged.py [--base main] [--dx 0.008] [--keep DIR]
+
+Runs T22-A70 (2D ISPH at --dx, to rest) and 1D-A70 (DA, with and without deposition) twice, with
+this working tree and with --base's src/ (``git archive`` into a temporary folder), each in its own
+process on one numba thread with its own numba cache, and compares every data variable and
+coordinate value for value (NaN equal to NaN). Prints the differing arrays and exits 1 when any
+differs, 0 when all agree. Both runs are made on this machine: OpenBLAS's kernels (np.dot in the
+ISPH CG) depend on the CPU, so stored digests would not be comparable across machines.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+RUNNER = """
+import sys
+import numpy as np
+import granudep
+dx, out = float(sys.argv[1]), sys.argv[2]
+arrays = {}
+for dep in (True, False):
+    ds = granudep.run_da("1D-A70", deposition=dep, progress=False)
+    for k, v in {**ds.coords, **ds.data_vars}.items():
+        arrays[f"1D-A70_{'deposition' if dep else 'nodeposition'}/{k}"] = np.asarray(v.values)
+ds = granudep.run_isph("T22-A70", dx=dx, progress=False)
+for k, v in {**ds.coords, **ds.data_vars}.items():
+    arrays[f"T22-A70/{k}"] = np.asarray(v.values)
+np.savez(out, **arrays)
+print(granudep.__file__, len(arrays), "arrays;", "T22-A70", ds.attrs["status"])
+"""
+
+
+def _run(src: Path, dx: float, out: Path, cache: Path) -> None:
+    env = {**os.environ, "PYTHONPATH": str(src), "NUMBA_NUM_THREADS": "1", "NUMBA_CACHE_DIR": str(cache),
+           "PYTHONDONTWRITEBYTECODE": "1"}
+    subprocess.run([sys.executable, "-c", RUNNER, str(dx), str(out)], env=env, check=True, cwd=src.parent)
+
+
+def _differences(a: Path, b: Path) -> list[str]:
+    x, y = np.load(a), np.load(b)
+    out = [f"{k}: only in {'the base' if k in x.files else 'this tree'}" for k in sorted(set(x.files) ^ set(y.files))]
+    for k in sorted(set(x.files) & set(y.files)):
+        u, v = x[k], y[k]
+        same = u.shape == v.shape and np.array_equal(u, v, equal_nan=u.dtype.kind in "fc")
+        if not same:
+            out.append(f"{k}: shape {u.shape} vs {v.shape}" if u.shape != v.shape else
+                       f"{k}: {int(np.sum(u != v))} of {u.size} values differ")
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--base", default="main", help="revision to compare with (default main)")
+    ap.add_argument("--dx", type=float, default=0.008, help="2D particle spacing, m (default 0.008)")
+    ap.add_argument("--keep", metavar="DIR", help="keep the two .npz files in DIR")
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory(prefix="granudep-unchanged-") as tmp:
+        tmp = Path(tmp)
+        base = tmp / "base"
+        base.mkdir()
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", args.base, "src"],
+                                 check=True, capture_output=True).stdout  # the base's package, no checkout
+        subprocess.run(["tar", "-x", "-C", str(base)], input=archive, check=True)
+        keep = Path(args.keep) if args.keep else tmp
+        keep.mkdir(parents=True, exist_ok=True)
+        files = {"base": keep / "base.npz", "tree": keep / "tree.npz"}
+        _run(base / "src", args.dx, files["base"], tmp / "cache_base")
+        _run(ROOT / "src", args.dx, files["tree"], tmp / "cache_tree")
+        diff = _differences(files["base"], files["tree"])
+    if diff:
+        print(f"outputs differ from {args.base}:\n  " + "\n  ".join(diff))
+        return 1
+    print(f"every array of T22-A70 (dx = {args.dx} m) and 1D-A70 (with and without deposition) is identical "
+          f"to {args.base}'s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
