@@ -261,22 +261,6 @@ def merge(base: Mapping[str, Any], override: Mapping[str, Any]) -> dict:
 
 # --- one loader and one override rule for every stage (issue 15) -----------------------------------
 
-#: modules still written with old key names, accepted from them only until they are migrated:
-#: isph/verification.py passes ``output.progress_s`` / ``output.interval`` (another engineer's file
-#: in session 8; rename its keys, then empty this tuple). Every other caller gets the refusal.
-_LEGACY_CALLERS = ("granudep.isph.verification",)
-
-
-def _legacy_caller() -> bool:
-    import sys
-    frame = sys._getframe(1)
-    while frame is not None:
-        if frame.f_globals.get("__name__") in _LEGACY_CALLERS:
-            return True
-        frame = frame.f_back
-    return False
-
-
 def renamed(cls: type) -> dict[str, str]:
     """Old key -> new key of ``cls``'s fields (``param(was=...)``)."""
     return {f.metadata["was"]: f.name for f in dataclasses.fields(cls) if f.metadata.get("was")}
@@ -287,9 +271,7 @@ def _renamed_keys(cls: type, data: Mapping[str, Any], where: str) -> Mapping[str
     if not old:
         return data
     new = renamed(cls)
-    if not _legacy_caller():
-        raise ConfigError(f"{where}{old[0]}: renamed to {where}{new[old[0]]} (one name per quantity across stages)")
-    return {new.get(k, k): v for k, v in data.items()}
+    raise ConfigError(f"{where}{old[0]}: renamed to {where}{new[old[0]]} (one name per quantity across stages)")
 
 
 def sections(cls: type) -> dict[str, type]:
@@ -352,11 +334,10 @@ def overrides_mapping(cls: type, overrides: Mapping[str, Any], example: str = ""
             continue
         if "." in key:
             dotted = key
-            if dotted in old and not _legacy_caller():
+            if dotted in old:
                 raise ConfigError(f"{key}: renamed to {old[key]} (one name per quantity across stages)")
-            dotted = old.get(dotted, dotted)
         else:
-            where = idx.get(key) or ([old[key]] if key in old and _legacy_caller() else [])
+            where = idx.get(key) or []
             if not where and key in old:
                 raise ConfigError(f"{key}: renamed to {old[key].rsplit('.', 1)[-1]} ({old[key]}; one name per "
                                   f"quantity across stages)")

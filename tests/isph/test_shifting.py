@@ -9,11 +9,8 @@ from granudep.isph.solver import IsphSolver
 
 
 def _layer(dx):
-    """The verification suite's periodic layer; its output keys are written with the new names here
-    (isph/verification.py still gives output.progress_s, accepted only from that module)."""
-    cfg = v.layer_config(30.0, 0.02, dx)
-    cfg["output"] = {"stop_at_rest": False, "progress_every_s": 1e9}
-    return IsphSolver(load_config(cfg))
+    """The verification suite's periodic layer."""
+    return IsphSolver(load_config(v.layer_config(30.0, 0.02, dx)))
 
 
 def _layer_terms(s):

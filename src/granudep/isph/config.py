@@ -121,11 +121,6 @@ class Wall:
                                     "projection with adjoint_pair, contact with the approximate projection")
     layers: int = param(0, ge=0, le=8, doc="wall particle layers; 0 = enough to cover the kernel support 2h")
 
-    @property
-    def phi_wall_deg(self) -> float:
-        """The old name, read by isph/solver.py and isph/verification.py (not a config key)."""
-        return self.phi_basal_deg
-
 
 @dataclass(frozen=True)
 class Numerics:
@@ -207,15 +202,6 @@ class Output:
     rest_duration: float = param(0.1, gt=0.0, unit="s", doc="... for this long")
     stop_at_rest: bool = param(True, doc="end the run once at rest")
     progress_every_s: float = param(5.0, gt=0.0, unit="s", was="progress_s", doc="wall seconds between progress lines")
-
-    # the old names, read by isph/solver.py (not a config key: `output.interval` is refused)
-    @property
-    def interval(self) -> float:
-        return self.dt_output
-
-    @property
-    def progress_s(self) -> float:
-        return self.progress_every_s
 
 
 @dataclass(frozen=True)

@@ -144,7 +144,7 @@ class IsphSolver:
         self.plane_lo = np.array([-math.inf] + ([0.0] if c.geometry.back_wall else []))
         self.plane_hi = np.array([math.inf] + ([math.inf] if c.geometry.back_wall else []))
         self.u_eps = c.wall.stick_speed
-        self.mu_wall = math.tan(math.radians(c.wall.phi_wall_deg))
+        self.mu_wall = math.tan(math.radians(c.wall.phi_basal_deg))
         self.t = 0.0
         self.step_no = 0
         self.stats = SolverStats()
@@ -720,7 +720,7 @@ class RunState:
 
 def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, solver: IsphSolver | None = None,
         checkpoint=None):
-    """Advance to rest or t_end, storing snapshots every ``output.interval``.
+    """Advance to rest or t_end, storing snapshots every ``output.dt_output``.
 
     Returns (solver, snapshots, status, time_to_rest). Raises IsphBlowUp with the partial
     snapshots attached (``exc.snapshots``) on NaN or escape. ``checkpoint``
@@ -733,10 +733,10 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
     st = checkpoint.resume() if checkpoint is not None else None
     resumed = st is not None
     if st is None:
-        st = RunState(solver if solver is not None else IsphSolver(cfg), Snapshots(), out.interval)
+        st = RunState(solver if solver is not None else IsphSolver(cfg), Snapshots(), out.dt_output)
     s, snaps = st.solver, st.snaps
     t_end = cfg.t_end
-    progress = progress or Progress(out.progress_s)
+    progress = progress or Progress(out.progress_every_s)
     tol = 1e-9
 
     def snap():
@@ -800,7 +800,7 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
             at_output = s.t >= st.next_out - tol
             if at_output:
                 snap()
-                st.next_out += out.interval
+                st.next_out += out.dt_output
                 # rest: the max speed of all granular particles (every particle deposited), or the
                 # rms speed of those behind the front (a gap of one empty dx cell in a thin deposit
                 # moves the front back, so the max is taken over all particles)

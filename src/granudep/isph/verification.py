@@ -29,7 +29,7 @@ def layer_config(theta_deg: float, height: float, dx: float, width_cells: int = 
     lp = width_cells * dx
     cfg = {"case": "layer", "geometry": {"theta_deg": theta_deg, "L0": lp, "H0": height, "back_wall": False,
                                          "periodic_length": lp},
-           "numerics": {"dx": dx}, "output": {"stop_at_rest": False, "progress_s": 1e9}}
+           "numerics": {"dx": dx}, "output": {"stop_at_rest": False, "progress_every_s": 1e9}}
     for k, v in sections.items():
         cfg.setdefault(k, {}).update(v)
     return cfg
@@ -92,7 +92,7 @@ def sliding_block(quick: bool = False) -> list[dict]:
     ref = -G * (cfg.wall_friction * math.cos(th) - math.sin(th))
     err = acc / ref - 1.0
     return [_row("coulomb_sliding_block", "mean acceleration / analytic - 1", acc / ref, 1.0, err, 0.15,
-                 f"a={acc:.3f} m/s2, analytic {ref:.3f} m/s2, mu_B=tan {cfg.wall.phi_wall_deg} deg")]
+                 f"a={acc:.3f} m/s2, analytic {ref:.3f} m/s2, mu_B=tan {cfg.wall.phi_basal_deg} deg")]
 
 
 def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
@@ -160,7 +160,7 @@ def collapse_t22a70(quick: bool = False) -> list[dict]:
     from .analysis import failure_plane_angle
     from .api import run_isph
     dx = 0.008 if quick else 0.004
-    ds = run_isph("T22-A70", dx=dx, progress_s=60.0)
+    ds = run_isph("T22-A70", dx=dx, progress_every_s=60.0)
     fp = failure_plane_angle(ds, t_norm=1.0)
     # Rankine's 45° + φ/2 is measured from the horizontal (vertical major principal stress); our
     # frame is slope-aligned, so the plane's angle from the horizontal is its angle from the bed + θ.
@@ -187,7 +187,7 @@ def dam_break_config(dx: float, slip: str = "free_slip", t_end: float = 1.0, **n
     return {"case": "dam-break", "geometry": {"theta_deg": 0.0, "L0": 0.057, "H0": 0.114, "domain_length": 1.0},
             "material": {"rho": 1000.0, "rho_s": 1000.0}, "rheology": {"model": "newtonian", "viscosity": 1e-3},
             "wall": {"slip": slip}, "numerics": {"dx": dx, "t_end": t_end, "energy_limit": 10.0, **numerics},
-            "output": {"progress_s": 1e9, "interval": 0.01, "stop_at_rest": False}}
+            "output": {"progress_every_s": 1e9, "dt_output": 0.01, "stop_at_rest": False}}
 
 
 def dam_break(quick: bool = False, projection: str | None = None, resolutions=None,
