@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 import time as _time
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -48,6 +49,31 @@ class IsphBlowUp(RuntimeError):
     def __init__(self, message: str, dataset=None):
         super().__init__(message)
         self.dataset = dataset
+
+
+class Neighbours(NamedTuple):
+    """The step's neighbour list (:func:`neighbours.build_neighbours`): CSR rows of the granular
+    particles, neighbour indices, pair vectors r_ij = x_i − x_j and distances."""
+    start: np.ndarray
+    nbr: np.ndarray
+    rx: np.ndarray
+    ry: np.ndarray
+    rr: np.ndarray
+
+
+class Geometry(NamedTuple):
+    """Per-step geometry shared by the stages: kernel values W and (dW/dr)/r per pair, concentration,
+    ∇C, renormalisation matrices and their diagonal, wall contact (planes, columns), detachment."""
+    wk: np.ndarray
+    gw: np.ndarray
+    conc: np.ndarray
+    gcx: np.ndarray
+    gcy: np.ndarray
+    lmat: np.ndarray
+    mdiag: tuple
+    contact: np.ndarray
+    col: np.ndarray
+    detached: np.ndarray
 
 
 @dataclass
@@ -211,49 +237,94 @@ class IsphSolver:
         return dt
 
     def step(self, dt: float) -> None:
-        c = self.cfg
-        nf, h, vol, rho = self.nf, self.h, self.vol, self.rho
+        """One time step (module doc): a recipe of named, timed stages."""
         t0 = _time.perf_counter()
+        nb = self._neighbours()
+        t1 = _time.perf_counter()
+        geo = self._geometry(nb)
+        self._rheology(nb, geo)
+        t2 = _time.perf_counter()
+        us, vs = self._predictor(nb, geo, dt)
+        t3 = _time.perf_counter()
+        u_old, v_old = self.u, self.v
+        self._projection(nb, geo, us, vs, dt)
+        t4 = _time.perf_counter()
+        self._shift_and_move(nb, geo, u_old, v_old, us, vs, dt)
+        t5 = _time.perf_counter()
+        st = self.stats
+        st.steps += 1
+        st.t_neigh += t1 - t0
+        st.t_kern += (t2 - t1) + (t5 - t4)
+        st.t_visc += t3 - t2
+        st.t_ppe += t4 - t3
+        self.nf_at_energy = self.nf
+        self._check()
+        self._check_energy()
+
+    def _neighbours(self) -> Neighbours:
+        """Stage 1a: the particle renumbering (every ``reorder_interval`` steps) and the neighbour list."""
         if self.reorder_interval and self.step_no % self.reorder_interval == 0:
             self._reorder()
-        start, nbr, rx, ry, rr = build_neighbours(self.x, self.y, nf, self.radius, self.period)
-        t1 = _time.perf_counter()
-        P = self.parts
-        wk, gw = operators.pair_kernel(rr, h)
-        divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol)
+        return Neighbours(*build_neighbours(self.x, self.y, self.nf, self.radius, self.period))
+
+    def _geometry(self, nb: Neighbours) -> Geometry:
+        """Stage 1b: kernel values, ∇·r, concentration, renormalisation, free surface, wall contact."""
+        c = self.cfg
+        nf, h = self.nf, self.h
+        wk, gw = operators.pair_kernel(nb.rr, h)
+        divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(nb.start, nb.nbr, nb.rx, nb.ry, nb.rr, wk, gw,
+                                                                     nf, h, self.vol)
         self.fs = divr < c.numerics.free_surface_threshold
-        contact, col = walls.wall_contact(start, nbr, nf, self.x, self.y, self.planes, self.dx, h,
-                                       c.wall.cover_offset * self.dx)
+        contact, col = walls.wall_contact(nb.start, nb.nbr, nf, self.x, self.y, self.planes, self.dx, h,
+                                          c.wall.cover_offset * self.dx)
         detached = walls.detached_from_walls(contact, 0.75 * self.dx)
+        return Geometry(wk, gw, conc, gcx, gcy, lmat, mdiag, contact, col, detached)
+
+    def _rheology(self, nb: Neighbours, geo: Geometry) -> None:
+        """Stage 2: the pressure the friction law sees (eq 5), η and |γ̇| from uⁿ, pⁿ."""
+        c = self.cfg
+        nf, h = self.nf, self.h
+        start, nbr, rx, ry, rr = nb
         rh = c.rheology
         # pressure seen by the friction law (eq 5): clipped below at the overburden of half a
         # particle layer, ρ g cosθ dx/2 (free-surface and thin-front particles keep friction)
         if rh.pressure_filter == "mls":
-            p_seen = operators.mls_linear_average(start, nbr, rx, ry, wk, nf, h, self.p)
+            p_seen = operators.mls_linear_average(start, nbr, rx, ry, geo.wk, nf, h, self.p)
         elif rh.pressure_filter == "shepard":
-            p_seen = operators.shepard_average(start, nbr, wk, nf, h, self.p)
+            p_seen = operators.shepard_average(start, nbr, geo.wk, nf, h, self.p)
         else:
             p_seen = self.p
         self.p_rheo = np.maximum(p_seen, self.p_floor)
-        if rh.model == "mu_i":
-            grad = operators.velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.x, self.y, self.u, self.v,
-                                        lmat, self.p_rheo, self.eta, P.wnx, P.wny, P.wc, self.slip,
-                                        c.wall.slip_length, self.mu_wall, self.dx, self.gx, self.gy, self.rho,
-                                        rh.eta_max, self.wall_ns, self.wall_k)
-            m = c.material
-            if rh.regularisation == "none" and rh.mu_inf == 0.0:
-                self.eta, self.gdot = viscous.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
-                                                        rh.eta_min, rh.eta_max)
-            else:
-                self.eta, self.gdot = regularised_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2,
-                                                            rh.mu_inf, m.I0, *self.reg, rh.eta_min, rh.eta_max)
-        t2 = _time.perf_counter()
-        indptr, indices, data, diag_v = viscous.assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, self.x, self.y,
-                                                    self.u, self.v, self.p_rheo, self.eta, self.gdot, P.wnx, P.wny,
-                                                    P.wc,
-                                                    self.slip, c.wall.slip_length, self.mu_wall, self.dx,
-                                                    dt, rho, self.eps2, self.mean, self.gx, self.gy,
-                                                    rh.eta_max, self.lap_norm, self.wall_ns, self.wall_k)
+        if rh.model != "mu_i":
+            return
+        P = self.parts
+        grad = operators.velocity_gradient(start, nbr, rx, ry, rr, geo.gw, nf, h, self.vol, self.x, self.y, self.u,
+                                           self.v, geo.lmat, self.p_rheo, self.eta, P.wnx, P.wny, P.wc, self.slip,
+                                           c.wall.slip_length, self.mu_wall, self.dx, self.gx, self.gy, self.rho,
+                                           rh.eta_max, self.wall_ns, self.wall_k)
+        m = c.material
+        if rh.regularisation == "none" and rh.mu_inf == 0.0:
+            self.eta, self.gdot = viscous.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
+                                                         rh.eta_min, rh.eta_max)
+        else:
+            self.eta, self.gdot = regularised_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2,
+                                                        rh.mu_inf, m.I0, *self.reg, rh.eta_min, rh.eta_max)
+
+    def _predictor(self, nb: Neighbours, geo: Geometry, dt: float):
+        """Stage 3: the predictor u*, implicit in the viscous stress, with the Coulomb wall drag in its
+        diagonal; books the viscous and wall-friction dissipation. Returns (u*, v*)."""
+        c = self.cfg
+        nf, h, rho = self.nf, self.h, self.rho
+        start, nbr, rx, ry, rr = nb
+        rh = c.rheology
+        P = self.parts
+        indptr, indices, data, diag_v = viscous.assemble_viscous(start, nbr, rx, ry, rr, geo.gw, nf, h, self.vol,
+                                                                 self.x, self.y, self.u, self.v, self.p_rheo,
+                                                                 self.eta, self.gdot, P.wnx, P.wny, P.wc,
+                                                                 self.slip, c.wall.slip_length, self.mu_wall,
+                                                                 self.dx, dt, rho, self.eps2, self.mean, self.gx,
+                                                                 self.gy, rh.eta_max, self.lap_norm, self.wall_ns,
+                                                                 self.wall_k)
         wall_du = wall_dv = None
         if self.slip == walls.SLIP_COULOMB:
             diag_u = data[indptr[:-1]].copy()
@@ -262,14 +333,15 @@ class IsphSolver:
                 if self.wall_an is None or self.wall_an.shape[0] != nf:
                     self.wall_an = np.zeros((nf, self.planes.shape[0]))
                 walls.coulomb_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, self.mu_wall, dt,
-                                              self.u_eps, diag_u, diag_v)
+                                                 self.u_eps, diag_u, diag_v)
             else:
                 if c.wall.contact_length == "voronoi":
-                    clen = walls.contact_length(start, nbr, nf, self.x, self.y, contact, self.planes, self.dx)
+                    clen = walls.contact_length(start, nbr, nf, self.x, self.y, geo.contact, self.planes, self.dx)
                 else:
-                    clen = np.full(contact.shape, self.dx)
-                walls.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, contact, col, self.planes, self.mu_wall,
-                                     self.gx, self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v, clen)
+                    clen = np.full(geo.contact.shape, self.dx)
+                walls.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, geo.contact, geo.col, self.planes,
+                                        self.mu_wall, self.gx, self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v,
+                                        clen)
             data[indptr[:-1]] = diag_u
             wall_du = diag_u - wall_du
             wall_dv = diag_v - wall_dv
@@ -294,26 +366,36 @@ class IsphSolver:
             self.visc_du = us - bu
             self.visc_dv = vs - bv
             self.visc_dt = dt
-        t3 = _time.perf_counter()
         eb = self.energy
         eb.dissipated += viscous_dissipation(self.m, self.u, self.v, us, vs, dt, self.gx, self.gy)
         if wall_du is not None:
             # the Coulomb wall's share: its diagonal increments times u*² (the drag's work)
             eb.wall_friction += self.m * float(np.dot(wall_du, us * us) + np.dot(wall_dv, vs * vs))
-        u_old, v_old = self.u, self.v
+        return us, vs
+
+    def _projection(self, nb: Neighbours, geo: Geometry, us, vs, dt: float) -> None:
+        """Stage 4: the pressure projection of u* (adjoint pair or approximate): pⁿ⁺¹ and uⁿ⁺¹."""
+        start, nbr, rx, ry, rr = nb
         # free-surface particles: diagonal renormalisation only (1/M_xx, 1/M_yy); with one-sided
         # support the full inverse mixes the wall-normal pressure gradient into the tangential one
-        lmat_p = operators.lmat_pressure(lmat, self.fs, *mdiag)
-        if c.numerics.projection == "adjoint_pair":
-            self._project_adjoint_pair(start, nbr, rx, ry, rr, gw, lmat_p, conc, us, vs, dt)
+        lmat_p = operators.lmat_pressure(geo.lmat, self.fs, *geo.mdiag)
+        if self.cfg.numerics.projection == "adjoint_pair":
+            self._project_adjoint_pair(start, nbr, rx, ry, rr, geo.gw, lmat_p, geo.conc, us, vs, dt)
         else:
-            self._project_approximate(start, nbr, rx, ry, rr, gw, lmat, lmat_p, conc, us, vs, dt, detached)
-        t4 = _time.perf_counter()
-        ncx, ncy = operators.smoothed_gradient(start, nbr, wk, nf, h, vol, gcx, gcy)
-        alpha = (shifting.surface_band(start, nbr, wk, nf, self.fs, h, 2.0 * self.dx) if c.numerics.shifting_surface == "band"
-                 else self.fs.astype(np.float64))
-        sx, sy = shifting.shifting(nf, gcx, gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
-                             ncx, ncy)
+            self._project_approximate(start, nbr, rx, ry, rr, geo.gw, geo.lmat, lmat_p, geo.conc, us, vs, dt,
+                                      geo.detached)
+
+    def _shift_and_move(self, nb: Neighbours, geo: Geometry, u_old, v_old, us, vs, dt: float) -> None:
+        """Stage 5: particle shifting, the new positions, the wall clamps and their energy terms."""
+        c = self.cfg
+        nf, h = self.nf, self.h
+        start, nbr = nb.start, nb.nbr
+        eb = self.energy
+        ncx, ncy = operators.smoothed_gradient(start, nbr, geo.wk, nf, h, self.vol, geo.gcx, geo.gcy)
+        alpha = (shifting.surface_band(start, nbr, geo.wk, nf, self.fs, h, 2.0 * self.dx)
+                 if c.numerics.shifting_surface == "band" else self.fs.astype(np.float64))
+        sx, sy = shifting.shifting(nf, geo.gcx, geo.gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
+                                   ncx, ncy)
         ke_new = kinetic_energy(self.m, self.u, self.v)
         eb.projection += pressure_work(self.m, u_old, v_old, us, vs, self.u, self.v)
         eb.shifting += -self.m * (self.gx * float(np.sum(sx)) + self.gy * float(np.sum(sy)))
@@ -323,7 +405,7 @@ class IsphSolver:
             self.x[:nf] %= self.period
         e_before = ke_new + potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy)
         n_clamped = walls.clamp_to_walls(nf, self.x, self.y, self.u, self.v, self.planes, 0.25 * self.dx,
-                                      self.plane_lo, self.plane_hi)
+                                         self.plane_lo, self.plane_hi)
         self.stats.clamped += n_clamped
         e_mech = e_before
         if n_clamped:
@@ -334,16 +416,6 @@ class IsphSolver:
         self._last_us = (us, vs, dt)
         self.t += dt
         self.step_no += 1
-        t5 = _time.perf_counter()
-        st = self.stats
-        st.steps += 1
-        st.t_neigh += t1 - t0
-        st.t_kern += (t2 - t1) + (t5 - t4)
-        st.t_visc += t3 - t2
-        st.t_ppe += t4 - t3
-        self.nf_at_energy = self.nf
-        self._check()
-        self._check_energy()
 
     def _project_approximate(self, start, nbr, rx, ry, rr, gw, lmat, lmat_p, conc, us, vs, dt, detached):
         """Approximate projection: compact-Laplacian PPE with mirror-pressure (Neumann) walls, the
