@@ -17,7 +17,7 @@ def _layer_terms(s):
     nf = s.nf
     start, nbr, rx, ry, rr = build_neighbours(s.x, s.y, nf, s.radius, s.period)
     wk, gw = operators.pair_kernel(rr, s.h)
-    divr, conc, gcx, gcy, lmat, _ = operators.geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, s.h, s.vol)
+    divr, conc, gcx, gcy, lmat, _ = operators.geometry_terms(start, rx, ry, rr, wk, gw, nf, s.h, s.vol)
     fs = divr < s.cfg.numerics.free_surface_threshold
     return start, nbr, wk, gcx, gcy, fs
 
@@ -53,7 +53,7 @@ def test_shift_below_the_surface_loses_its_normal_part():
     s = _layer(dx)
     start, nbr, wk, gcx, gcy, fs = _layer_terms(s)
     s.u[:] = 1.0
-    ncx, ncy = operators.smoothed_gradient(start, nbr, wk, s.nf, s.h, s.vol, gcx, gcy)
+    ncx, ncy = operators.smoothed_gradient(start, nbr, wk, s.nf, s.h, gcx, gcy)
     layer = np.round((0.02 - dx / 2 - s.y[:s.nf]) / dx).astype(int)
     dt = 1e-4
     alpha = shifting.surface_band(start, nbr, wk, s.nf, fs, s.h, 2.0 * dx)

@@ -109,7 +109,7 @@ def mls_linear_average(start, nbr, rx, ry, wk, nf, h, f):
 
 
 @prange_kernel
-def geometry_terms(start, nbr, rx, ry, rr, wk, gw, nf, h, vol):
+def geometry_terms(start, rx, ry, rr, wk, gw, nf, h, vol):
     """∇·r (free-surface detector, Lee et al. 2008), concentration C = Σ V W (self included),
     ∇C (shifting, normals) and the inverse renormalisation matrix L (Bonet & Lok 1999)."""
     divr = np.zeros(nf)
@@ -178,8 +178,7 @@ def lmat_pressure(lmat, fs, mxx, myy):
 
 
 @prange_kernel
-def velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, lmat, p, eta,
-                      wnx, wny, wc, slip, slip_length, mu_wall, dx, gx, gy, rho, eta_max, wall_ns, wall_k):
+def velocity_gradient(start, nbr, rx, ry, gw, nf, vol, x, y, u, v, lmat, wnx, wny, wc, slip, slip_length, dx):
     """Renormalised ∇u (rows: du/dx, du/dy, dv/dx, dv/dy); wall neighbours carry the extrapolated
     wall velocity (normal component = u_i's, tangential (1 − βφ) u_i,t)."""
     grad = np.zeros((nf, 4))
@@ -208,12 +207,12 @@ def velocity_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, lmat, 
                 # u_w - u_i = -β u_t
                 du = -beta * (u[i] - un * nx)
                 dv = -beta * (v[i] - un * ny)
-            gx = vol * g * rx[k]
-            gy = vol * g * ry[k]
-            a0 += du * gx
-            a1 += du * gy
-            a2 += dv * gx
-            a3 += dv * gy
+            wx = vol * g * rx[k]
+            wy = vol * g * ry[k]
+            a0 += du * wx
+            a1 += du * wy
+            a2 += dv * wx
+            a3 += dv * wy
         l0 = lmat[i, 0]
         l1 = lmat[i, 1]
         l2 = lmat[i, 2]
@@ -237,7 +236,7 @@ def shear_rate(grad, i):
 
 
 @prange_kernel
-def divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, u, v, lmat):
+def divergence(start, nbr, rx, ry, gw, nf, vol, u, v, lmat):
     """∇·u_i = tr(L_i Σ_j V (u_j − u_i) ⊗ ∇_i W_ij) over granular neighbours (walls enter through
     the pressure Neumann condition, not here). With the renormalisation L (identity where the
     support is too sparse) the divergence of any linear velocity field is exact, also with a
@@ -266,7 +265,7 @@ def divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, u, v, lmat):
 
 
 @prange_kernel
-def pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, p, us, vs, lmat, wnx, wny, dt, rho, detached):
+def pressure_gradient(start, nbr, rx, ry, gw, nf, vol, p, us, vs, lmat, wnx, wny, dt, rho, detached):
     """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure.
 
     ``detached`` particles (first layer over a wall but farther than 0.75 dx from it) ignore the
@@ -298,7 +297,7 @@ def pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, p, us, vs, lmat, w
 
 
 @prange_kernel
-def smoothed_gradient(start, nbr, wk, nf, h, vol, gx, gy):
+def smoothed_gradient(start, nbr, wk, nf, h, gx, gy):
     """Kernel (Shepard) average of a granular particle field's gradient over each support: the
     surface normal of the shifting. The raw ∇C of a free-surface particle points at the nearest
     clump of surface particles (no pressure acts between them), so projecting the shift onto the

@@ -10,8 +10,8 @@ from .parallel import prange_kernel
 
 
 @prange_kernel
-def assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_dir, div, us, vs, conc, c0,
-                 relax, wnx, wny, dt, rho, eps2, a_full, lap_norm):
+def assemble_ppe(start, nbr, rx, ry, rr, gw, nf, vol, unknown, n_unknown, p_dir, div, us, vs, conc, c0, relax, wnx,
+                 wny, dt, rho, eps2, a_full, lap_norm):
     """PPE Σ_j a_ij (p_i − p_j) = −(ρ/Δt) ∇·u* − γ ρ/Δt² min(1 − C_i/C0, 0) over the unknown
     (non-free-surface) particles; a_ij = 2 V F_ij (Cummins & Rudman 1999 Laplacian). Free-surface
     neighbours have their Dirichlet value ``p_dir``; wall neighbours use the mirror pressure (Neumann), which moves to the RHS.

@@ -272,8 +272,8 @@ class IsphSolver:
         c = self.cfg
         nf, h = self.nf, self.h
         wk, gw = operators.pair_kernel(nb.rr, h)
-        divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(nb.start, nb.nbr, nb.rx, nb.ry, nb.rr, wk, gw,
-                                                                     nf, h, self.vol)
+        divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(nb.start, nb.rx, nb.ry, nb.rr, wk, gw, nf, h,
+                                                                     self.vol)
         self.fs = divr < c.numerics.free_surface_threshold
         contact, col = walls.wall_contact(nb.start, nb.nbr, nf, self.x, self.y, self.planes, self.dx, h,
                                           c.wall.cover_offset * self.dx)
@@ -298,10 +298,8 @@ class IsphSolver:
         if rh.model != "mu_i":
             return
         P = self.parts
-        grad = operators.velocity_gradient(start, nbr, rx, ry, rr, geo.gw, nf, h, self.vol, self.x, self.y, self.u,
-                                           self.v, geo.lmat, self.p_rheo, self.eta, P.wnx, P.wny, P.wc, self.slip,
-                                           c.wall.slip_length, self.mu_wall, self.dx, self.gx, self.gy, self.rho,
-                                           rh.eta_max, self.wall_ns, self.wall_k)
+        grad = operators.velocity_gradient(start, nbr, rx, ry, geo.gw, nf, self.vol, self.x, self.y, self.u, self.v,
+                                           geo.lmat, P.wnx, P.wny, P.wc, self.slip, c.wall.slip_length, self.dx)
         m = c.material
         if rh.regularisation == "none" and rh.mu_inf == 0.0:
             self.eta, self.gdot = viscous.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
@@ -314,17 +312,13 @@ class IsphSolver:
         """Stage 3: the predictor u*, implicit in the viscous stress, with the Coulomb wall drag in its
         diagonal; books the viscous and wall-friction dissipation. Returns (u*, v*)."""
         c = self.cfg
-        nf, h, rho = self.nf, self.h, self.rho
+        nf, rho = self.nf, self.rho
         start, nbr, rx, ry, rr = nb
-        rh = c.rheology
         P = self.parts
-        indptr, indices, data, diag_v = viscous.assemble_viscous(start, nbr, rx, ry, rr, geo.gw, nf, h, self.vol,
-                                                                 self.x, self.y, self.u, self.v, self.p_rheo,
-                                                                 self.eta, self.gdot, P.wnx, P.wny, P.wc,
-                                                                 self.slip, c.wall.slip_length, self.mu_wall,
-                                                                 self.dx, dt, rho, self.eps2, self.mean, self.gx,
-                                                                 self.gy, rh.eta_max, self.lap_norm, self.wall_ns,
-                                                                 self.wall_k)
+        indptr, indices, data, diag_v = viscous.assemble_viscous(start, nbr, rr, geo.gw, nf, self.vol, self.x, self.y,
+                                                                 self.eta, self.gdot, P.wnx, P.wny, P.wc, self.slip,
+                                                                 c.wall.slip_length, self.dx, dt, rho, self.eps2,
+                                                                 self.mean, self.lap_norm, self.wall_ns)
         wall_du = wall_dv = None
         if self.slip == walls.SLIP_COULOMB:
             diag_u = data[indptr[:-1]].copy()
@@ -391,7 +385,7 @@ class IsphSolver:
         nf, h = self.nf, self.h
         start, nbr = nb.start, nb.nbr
         eb = self.energy
-        ncx, ncy = operators.smoothed_gradient(start, nbr, geo.wk, nf, h, self.vol, geo.gcx, geo.gcy)
+        ncx, ncy = operators.smoothed_gradient(start, nbr, geo.wk, nf, h, geo.gcx, geo.gcy)
         alpha = (shifting.surface_band(start, nbr, geo.wk, nf, self.fs, h, 2.0 * self.dx)
                  if c.numerics.shifting_surface == "band" else self.fs.astype(np.float64))
         sx, sy = shifting.shifting(nf, geo.gcx, geo.gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
@@ -421,11 +415,11 @@ class IsphSolver:
         """Approximate projection: compact-Laplacian PPE with mirror-pressure (Neumann) walls, the
         renormalised difference gradient in the corrector."""
         c = self.cfg
-        nf, h, vol, rho, P = self.nf, self.h, self.vol, self.rho, self.parts
+        nf, vol, rho, P = self.nf, self.vol, self.rho, self.parts
         if c.numerics.ppe_divergence == "adjoint":
             div = adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, us, vs, lmat_p)
         else:
-            div = operators.divergence(start, nbr, rx, ry, rr, gw, nf, h, vol, us, vs, lmat)
+            div = operators.divergence(start, nbr, rx, ry, gw, nf, vol, us, vs, lmat)
         unknown = np.full(nf, -1, np.int64)
         interior = ~self.fs
         n_unknown = int(interior.sum())
@@ -434,13 +428,13 @@ class IsphSolver:
         # of a free-surface particle: p_fs = ρ g cosθ dx/2 (bed-normal hydrostatics), or 0
         p_new = np.where(self.fs, self.p_fs, 0.0)
         if n_unknown:
-            pi, pj, pd, rhs = ppe.assemble_ppe(start, nbr, rx, ry, rr, gw, nf, h, vol, unknown, n_unknown, p_new, div,
-                                              us, vs, conc, self.c0, c.numerics.density_relaxation, P.wnx, P.wny,
-                                              dt, rho, self.eps2, self.a_full, self.lap_norm)
+            pi, pj, pd, rhs = ppe.assemble_ppe(start, nbr, rx, ry, rr, gw, nf, vol, unknown, n_unknown, p_new, div,
+                                               us, vs, conc, self.c0, c.numerics.density_relaxation, P.wnx, P.wny, dt,
+                                               rho, self.eps2, self.a_full, self.lap_norm)
             p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
         self.p = p_new
-        gpx, gpy = operators.pressure_gradient(start, nbr, rx, ry, rr, gw, nf, h, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
-                                        dt, rho, detached)
+        gpx, gpy = operators.pressure_gradient(start, nbr, rx, ry, gw, nf, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
+                                               dt, rho, detached)
         self.u = us - dt / rho * gpx
         self.v = vs - dt / rho * gpy
 

@@ -71,9 +71,8 @@ def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
 
 
 @prange_kernel
-def assemble_viscous(start, nbr, rx, ry, rr, gw, nf, h, vol, x, y, u, v, p, eta, gdot, wnx, wny, wc,
-                     slip, slip_length, mu_wall, dx, dt, rho, eps2, mean, gx, gy, eta_max, lap_norm, wall_ns,
-                     wall_k):
+def assemble_viscous(start, nbr, rr, gw, nf, vol, x, y, eta, gdot, wnx, wny, wc, slip, slip_length, dx, dt, rho, eps2,
+                     mean, lap_norm, wall_ns):
     """Implicit viscous matrices A = I − Δt/ρ ∇·(η∇·) (Morris Laplacian, pair viscosity
     :func:`pair_viscosity`, ``rheology.pair_mean``: stress-weighted by default) as CSR.
 
