@@ -59,6 +59,7 @@ def make_run(frames, *, dx=0.004, h_ratio=1.3, L0=0.2, H0=0.14, theta_deg=22.0, 
          "front_position": var(np.full(nt, x_inf), ("time",), "m", "front position"),
          "kinetic_energy": var(np.zeros(nt), ("time",), "J m-1", "kinetic energy"),
          "final_front_position": var(x_inf, (), "m", "final front position"),
+         "final_front_v99": var(x_inf, (), "m", "final 1 % volume front (the monitor's x_inf by default)"),
          "time_to_rest": var(t[-1], (), "s", "time to rest")},
         coords={"time": var(t, ("time",), "s", "time")})
     mat = cases.material("glass_beads")

@@ -253,3 +253,17 @@ def test_incomplete_run_is_flagged(caplog):
     run = strip_run(u_flow=0.5)
     run["time_to_rest"] = run.time_to_rest.copy(data=np.nan)
     assert monitor(run).attrs["run_complete"] == 0
+
+
+def test_x_inf_is_the_runs_volume_front_unless_another_front_is_named():
+    """x_inf (eq 35) defaults to the 1 % volume front: the 2 d attached front of a 2D run is not resolved
+    at dx >= 2 d (T22-A70 at 1.4 mm: 2.12 m against a volume front of 3.31 m)."""
+    run = strip_run()
+    run = run.assign(final_front_v99=run["final_front_v99"] * 0 + 0.55, final_front_2d=run["final_front_v99"] * 0 + 0.5)
+    assert monitor(run).attrs["x_inf"] == 0.55
+    assert monitor(run, x_inf_front="2d").attrs["x_inf"] == 0.5
+    assert monitor(run, x_inf_front="position").attrs["x_inf"] == 0.6
+    with pytest.raises(ConfigError, match="monitor.x_inf_front: must be one of"):
+        monitor(run, x_inf_front="front")
+    with pytest.raises(ConfigError, match="run.final_front_5mm: missing"):
+        monitor(run, x_inf_front="5mm")

@@ -1,7 +1,7 @@
 """Convergence and sensitivity figures (beyond the paper).
 
 ``convergence``: from a list of files of the same case(s) at several resolutions: 2D ISPH runs
-(final runout ΔL/L0 and flow time vs dx), regression critical.csv files (critical times (t_s)_C vs
+(final runout ΔL/L0 of the robust front measures and the time to rest vs dx), regression critical.csv files (critical times (t_s)_C vs
 dx; dx from a ``dx`` column, else from ``dx<number>`` in the path, else paired in order with the 2D
 runs) and DA runs (final runout and flow time vs particle count).
 
@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..report.da_vs_reference import reference_row
 from ..config import ConfigError
 from .common import add_inputs, case_of, classify, hide_unused, load, load_table, new_figure, note, panel_label, register
 
@@ -30,6 +29,25 @@ def _dx_of_csv(path, df) -> float | None:
         return float(df["dx"].iloc[0])
     m = _DX.findall(str(path))
     return float(m[-1]) if m else None
+
+
+#: a thickness threshold is resolved by a run when it spans at least this many particle layers
+FRONT_MIN_LAYERS = 2.0
+
+
+def _front_row(ds) -> dict:
+    """ΔL/L0 of the robust front measures of a 2D run (issue 11) and its time to rest t_s/t_c; an
+    attached front whose thickness threshold spans fewer than FRONT_MIN_LAYERS particle layers
+    (threshold < 2 dx: a sheet one particle thick reads as that thickness) is not resolved: NaN."""
+    L0, dx, d = float(ds.attrs["L0"]), float(ds.attrs["dx"]), float(ds.attrs["d"])
+    out = {"dx": dx, "t_rest": float(ds.attrs.get("time_to_rest_norm", np.nan))}
+    for key, thickness in (("v99", None), ("5mm", 0.005), ("2d", 2.0 * d)):
+        var = f"final_front_{key}"
+        x = float(ds[var].values) if var in ds else np.nan
+        if thickness is not None and thickness < FRONT_MIN_LAYERS * dx:
+            x = np.nan
+        out[key] = (x - L0) / L0
+    return out
 
 
 def convergence(isph=(), critical=(), da=(), x_norms=(0.2, 0.4, 0.6, 0.8)):
@@ -51,15 +69,19 @@ def convergence(isph=(), critical=(), da=(), x_norms=(0.2, 0.4, 0.6, 0.8)):
     if isph:
         rows = defaultdict(list)
         for ds in isph:
-            r = reference_row(ds)
             dx = float(ds.attrs["dx"])
             dx_list.append(dx)
-            rows[case_of(ds)].append((dx, r["final_runout_norm"], r["flow_time"]))
+            rows[case_of(ds)].append(_front_row(ds))
         for j, (case, v) in enumerate(sorted(rows.items())):
-            v = np.array(sorted(v))
-            ax_of["2d_runout"].plot(v[:, 0] * 1e3, v[:, 1], "-o", color=f"C{j}", label=case)
-            ax_of["2d_time"].plot(v[:, 0] * 1e3, v[:, 2], "-o", color=f"C{j}", label=case)
-        for key, lab in (("2d_runout", "final runout ΔL/L0 (–)"), ("2d_time", "flow time t_F (s)")):
+            v = sorted(v, key=lambda r: -r["dx"])
+            dxs = np.array([r["dx"] for r in v]) * 1e3
+            for key, style, label in (("v99", "-o", "1 % volume front"), ("5mm", "--s", "attached front, 5 mm"),
+                                      ("2d", ":^", "attached front, 2 d")):
+                y = np.array([r[key] for r in v])
+                if np.isfinite(y).any():
+                    ax_of["2d_runout"].plot(dxs, y, style, color=f"C{j}", label=f"{case}, {label}")
+            ax_of["2d_time"].plot(dxs, [r["t_rest"] for r in v], "-o", color=f"C{j}", label=case)
+        for key, lab in (("2d_runout", "final runout ΔL/L0 (–)"), ("2d_time", "time to rest t_s/t_c (–)")):
             ax_of[key].set_xlabel("2D particle spacing dx (mm)")
             ax_of[key].set_ylabel(lab)
             ax_of[key].invert_xaxis()
@@ -115,8 +137,9 @@ def convergence(isph=(), critical=(), da=(), x_norms=(0.2, 0.4, 0.6, 0.8)):
     for k, key in enumerate(panels):
         panel_label(ax_of[key], k)
     hide_unused(axes, len(panels))
-    note(fig, "Finer resolution to the right. Front: depth ≥ the file's front_depth_threshold, contiguous; "
-              "flow time: front moves < 1 mm afterwards (docs/paper-notes.md, Shared definitions).")
+    note(fig, "Finer resolution to the right. 2D fronts (a): the 1 % volume front and the attached fronts at 5 mm and "
+              "2 d, each drawn only where its thickness spans >= 2 particle layers; t_s: max speed < 0.1 m/s. "
+              "DA fronts: depth >= the file's front_depth_threshold (docs/paper-notes.md, Shared definitions).")
     return fig
 
 

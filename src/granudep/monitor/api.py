@@ -58,12 +58,14 @@ def _geometry(run: xr.Dataset, cfg: MonitorConfig) -> dict:
     g = {k: float(run.attrs[k]) for k in REQUIRED_ATTRS}
     if not 0.0 <= g["theta_deg"] < 90.0:
         raise ConfigError(f"run.attrs.theta_deg: must be >= 0 and < 90 (got {g['theta_deg']!r})")
+    front_var = "final_front_position" if cfg.x_inf_front == "position" else f"final_front_{cfg.x_inf_front}"
     if cfg.x_inf is not None:
         x_inf = float(cfg.x_inf)
-    elif "final_front_position" in run.variables:
-        x_inf = float(run["final_front_position"])
+    elif front_var in run.variables:
+        x_inf = float(run[front_var])
     else:
-        raise ConfigError("run.final_front_position: missing; give monitor.x_inf (m from the back wall)")
+        raise ConfigError(f"run.{front_var}: missing (monitor.x_inf_front: {cfg.x_inf_front}); give monitor.x_inf "
+                          "(m from the back wall) or another x_inf_front")
     if not (math.isfinite(x_inf) and x_inf > g["L0"]):
         raise ConfigError(f"x_inf: must be > L0 = {g['L0']} m (got {x_inf!r}); the sections span [L0, x_inf]")
     bed_end = float(run.attrs["domain_length"]) if "domain_length" in run.attrs else \
@@ -80,9 +82,9 @@ def _geometry(run: xr.Dataset, cfg: MonitorConfig) -> dict:
     all_deposited = bool(np.all(last_speed[np.isfinite(last_speed)] < cfg.critical_speed))
     complete = (math.isfinite(time_to_rest) or all_deposited) and not status.lower().startswith("failed")
     if not complete and cfg.x_inf is None:
-        LOG.warning("run %s did not reach rest (status: %s; time_to_rest = %s): x_inf = final_front_position "
-                    "= %.4f m is not the final runout and late onsets are cut off", run.attrs.get("case", "?"),
-                    status or "unknown", time_to_rest, x_inf)
+        LOG.warning("run %s did not reach rest (status: %s; time_to_rest = %s): x_inf = %s = %.4f m is not "
+                    "the final runout and late onsets are cut off", run.attrs.get("case", "?"), status or "unknown",
+                    time_to_rest, front_var, x_inf)
     theta = math.radians(g["theta_deg"])
     g.update(time_to_rest=time_to_rest, complete=complete, x_inf=x_inf, theta=theta, a=g["H0"] / g["L0"],
              t_c=cases.characteristic_time(g["H0"], theta), p0=cases.momentum_scale(g["H0"], theta))

@@ -18,7 +18,7 @@ def _common(p) -> None:
                    help="eq 16 threshold on div r over deposited neighbours (default 1.6)")
     p.add_argument("--interface-threshold", type=float, default=None, help=argparse.SUPPRESS)  # old name: refused
     p.add_argument("--x-inf", type=float, default=None, metavar="X",
-                   help="final runout x_inf in m from the back wall (default: the run's final_front_position)")
+                   help="final runout x_inf in m from the back wall (default: the run's front named by x_inf_front)")
     p.add_argument("--n-sections", type=int, default=None, metavar="N", help="number of sections (default 11)")
     add_run_args(p, "bed_mirror=false")
 

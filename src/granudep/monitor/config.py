@@ -25,7 +25,13 @@ class MonitorConfig:
     bed_mirror: bool = param(True, doc="count mirror images of deposited particles below the bed y = 0 "
                                        "in eq 16 (the rigid bed is at rest; the run holds no wall particles)")
     x_inf: float | None = param(None, gt=0.0, unit="m",
-                                doc="final runout x_inf (m from the back wall); null = the run's final_front_position")
+                                doc="final runout x_inf (m from the back wall); null = the run's front named by "
+                                    "x_inf_front")
+    x_inf_front: str = param("v99", choices=("v99", "5mm", "2d", "tail", "position"),
+                             doc="which final front of the 2D run is x_inf (eq 35): v99 = the point beyond which "
+                                 "1 % of the deposit lies (default: resolved at every dx), 5mm / 2d = the attached "
+                                 "front at that thickness, tail = the attached mass at any thickness, position = "
+                                 "the run's final_front_position (its default front, 2 d)")
     wm_factors: tuple[float, ...] = param((1.0, 2.0, 3.0, 4.0), unit="1",
                                           doc="monitor-wm: section widths in units of dx (Appendix: 1..4)")
     wm_reference: float = param(2.0, gt=0.0, unit="1",
