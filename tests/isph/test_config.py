@@ -41,3 +41,17 @@ def test_yaml_user_case(tmp_path):
     f.write_text("case: my_case\ngeometry: {theta_deg: 18, L0: 0.1, H0: 0.05}\nnumerics: {dx: 0.005}\n")
     cfg = load_config(f)
     assert cfg.case == "my_case" and cfg.geometry.theta_deg == 18 and cfg.numerics.dx == 0.005
+
+
+def test_density_relaxation_per_time_scales_the_weight_with_the_step():
+    """per_time: the weight is γ Δt/Δt_ref (Δt_ref the gravity cap), so the relaxation rate per unit
+    time does not depend on Δt; per_step: γ at any Δt."""
+    from granudep.isph.solver import IsphSolver
+    s = IsphSolver(load_config("T22-A70", dx=0.02, **{"numerics.density_relaxation_form": "per_time"}))
+    ref = s.gravity_step()
+    assert abs(ref - 0.125 * (s.h / 9.81) ** 0.5) < 1e-15
+    assert s.density_relaxation(ref) == 0.02
+    assert abs(s.density_relaxation(0.25 * ref) - 0.005) < 1e-15
+    assert s.density_relaxation(2.0 * ref) == 0.02
+    s2 = IsphSolver(load_config("T22-A70", dx=0.02, **{"numerics.density_relaxation_form": "per_step"}))
+    assert s2.density_relaxation(0.25 * ref) == 0.02

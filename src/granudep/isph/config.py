@@ -139,6 +139,12 @@ class Numerics:
                                       "min(1, sum W_ij / W(2 dx)) over free-surface neighbours j, just below them (band)")
     density_relaxation: float = param(0.02, ge=0.0, le=1.0, unit="1",
                                       doc="weight of the density-invariant source (1 - C_i/C0)/dt^2 in the PPE")
+    density_relaxation_form: str = param("per_step", choices=("per_step", "per_time"),
+                                         doc="per_step: the source removes the fraction density_relaxation of the "
+                                             "compression 1 - C/C0 in every step (its rate per unit time grows as "
+                                             "1/dt); per_time: the fraction density_relaxation dt/dt_ref, dt_ref = "
+                                             "the gravity cap of the step (0.125 or 0.25 sqrt(h/g)): the same rate "
+                                             "per unit time at any dt")
     free_surface_pressure: str = param("half_layer", choices=("half_layer", "zero"),
                                        doc="Dirichlet value on free-surface particles: rho g cos(theta) dx/2 or 0")
     ppe_divergence: str = param("renormalised", choices=("renormalised", "adjoint"),

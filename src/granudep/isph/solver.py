@@ -224,14 +224,26 @@ class IsphSolver:
         w, n = self.cfg.wall, self.cfg.numerics
         return w.coulomb_normal == "projection" or (w.coulomb_normal == "auto" and n.projection == "adjoint_pair")
 
+    def gravity_step(self) -> float:
+        """The step's gravity cap c sqrt(h/g): c = 0.125 with the adjoint pair, 0.25 otherwise."""
+        c_g = 0.125 if self.cfg.numerics.projection == "adjoint_pair" else 0.25
+        return c_g * math.sqrt(self.h / G)
+
+    def density_relaxation(self, dt: float) -> float:
+        """Weight γ of the density-invariant source −γ ρ/Δt² min(1 − C/C0, 0) in this step
+        (``numerics.density_relaxation_form``): γ, or γ Δt/Δt_ref with Δt_ref the gravity cap."""
+        n = self.cfg.numerics
+        if n.density_relaxation_form == "per_time":
+            return n.density_relaxation * min(dt / self.gravity_step(), 1.0)
+        return n.density_relaxation
+
     def time_step(self) -> float:
         n = self.cfg.numerics
         umax = float(np.sqrt(np.max(self.u ** 2 + self.v ** 2))) if self.nf else 0.0
         # gravity-wave bound dt <= c sqrt(h/g): c = 0.25; the adjoint-pair projection needs
         # c = 0.125 (a Newtonian film at dx = 0.5 mm compacted by 14 % within 0.02 s at
         # c = 0.246 and stayed put at c = 0.12-0.18; the 1 mm film, c = 0.17, is stable)
-        c_g = 0.125 if n.projection == "adjoint_pair" else 0.25
-        dt = min(n.dt_max, c_g * math.sqrt(self.h / G))
+        dt = min(n.dt_max, self.gravity_step())
         if umax > 0:
             dt = min(dt, n.cfl * self.h / umax)
         return dt
@@ -429,7 +441,7 @@ class IsphSolver:
         p_new = np.where(self.fs, self.p_fs, 0.0)
         if n_unknown:
             pi, pj, pd, rhs = ppe.assemble_ppe(start, nbr, rx, ry, rr, gw, nf, vol, unknown, n_unknown, p_new, div,
-                                               us, vs, conc, self.c0, c.numerics.density_relaxation, P.wnx, P.wny, dt,
+                                               us, vs, conc, self.c0, self.density_relaxation(dt), P.wnx, P.wny, dt,
                                                rho, self.eps2, self.a_full, self.lap_norm)
             p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
         self.p = p_new
@@ -452,7 +464,7 @@ class IsphSolver:
             self.wall_dry = np.zeros(nw, dtype=bool)
         p, gpx, gpy, self.wall_dry, released = adjoint_pair_projection(
             start, nbr, rx, ry, rr, gw, nf, nw, self.vol, lmat_p, self.parts.wnx, self.parts.wny, self.fs, self.p_fs, us, vs, conc, self.c0,
-            c.numerics.density_relaxation, dt, self.rho, self.eps2, self.lap_norm,
+            self.density_relaxation(dt), dt, self.rho, self.eps2, self.lap_norm,
             c.numerics.projection_stabilisation, guess, self._solve_ppe, self.wall_dry,
             release=c.numerics.wall_release)
         self.stats.walls_released += released
