@@ -91,6 +91,10 @@ class Snapshots:
 
 
 #: energy terms stored per snapshot (J m-1), see :mod:`.energy`
+#: the per-particle state besides the positions, one row per granular particle: what the renumbering
+#: (:meth:`IsphSolver._reorder`) permutes and the outflow (:meth:`IsphSolver._remove`) filters
+PARTICLE_FIELDS = ("u", "v", "p", "eta", "gdot", "fs", "p_rheo", "visc_du", "visc_dv", "ids", "wall_an")
+
 ENERGY_TERMS = ("potential", "dissipated", "wall_friction", "projection", "shifting", "clamps", "outflow")
 
 
@@ -500,6 +504,15 @@ class IsphSolver:
         return (kinetic_energy(self.m, self.u, self.v)
                 + potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy))
 
+    def _take_rows(self, index) -> None:
+        """Permute (an index array) or filter (a mask) every per-particle array of PARTICLE_FIELDS
+        present with one row per granular particle (the positions are handled by the callers)."""
+        nf = self.nf
+        for name in PARTICLE_FIELDS:
+            a = getattr(self, name, None)
+            if a is not None and np.ndim(a) >= 1 and a.shape[0] == nf:
+                setattr(self, name, a[index])
+
     def _reorder(self) -> None:
         """Renumber the granular particles in natural order: columns of width dx (down-slope), by
         height within a column, as the initial lattice is numbered. The flow mixes the numbering,
@@ -515,12 +528,7 @@ class IsphSolver:
             return
         self.x[:nf] = self.x[:nf][perm]
         self.y[:nf] = self.y[:nf][perm]
-        for name in ("u", "v", "p", "eta", "gdot", "fs", "p_rheo", "visc_du", "visc_dv", "ids"):
-            a = getattr(self, name, None)
-            if a is not None and np.ndim(a) == 1 and a.size == nf:
-                setattr(self, name, a[perm])
-        if self.wall_an is not None and self.wall_an.shape[0] == nf:
-            self.wall_an = self.wall_an[perm]
+        self._take_rows(perm)
         self._last_us = None
         self.permuted = True
 
@@ -687,13 +695,7 @@ class IsphSolver:
                 LOG.warning("isph %s: further outflow departures are counted, not logged", self.cfg.case)
         self.x = np.concatenate([self.x[:nf][keep], self.x[nf:]])
         self.y = np.concatenate([self.y[:nf][keep], self.y[nf:]])
-        for name in ("u", "v", "p", "eta", "gdot", "fs", "p_rheo", "visc_du", "visc_dv"):
-            a = getattr(self, name, None)
-            if a is not None and np.ndim(a) == 1 and a.size == nf:
-                setattr(self, name, a[keep])
-        if self.wall_an is not None and self.wall_an.shape[0] == nf:
-            self.wall_an = self.wall_an[keep]
-        self.ids = self.ids[keep]
+        self._take_rows(keep)
         self.nf = int(keep.sum())
 
     def full(self, a: np.ndarray, fill: float = 0.0) -> np.ndarray:
