@@ -139,7 +139,7 @@ class Numerics:
                                       "min(1, sum W_ij / W(2 dx)) over free-surface neighbours j, just below them (band)")
     density_relaxation: float = param(0.02, ge=0.0, le=1.0, unit="1",
                                       doc="weight of the density-invariant source (1 - C_i/C0)/dt^2 in the PPE")
-    density_relaxation_form: str = param("per_step", choices=("per_step", "per_time"),
+    density_relaxation_form: str = param("per_time", choices=("per_step", "per_time"),
                                          doc="per_step: the source removes the fraction density_relaxation of the "
                                              "compression 1 - C/C0 in every step (its rate per unit time grows as "
                                              "1/dt); per_time: the fraction density_relaxation dt/dt_ref, dt_ref = "
