@@ -145,8 +145,9 @@ def caption_numbers(results, convergence_dx=None) -> dict:
     if conv.is_dir() and any(conv.glob("*.nc")):
         def convergence():
             iso = _study_rows_isph(conv, convergence_dx).sort_values("dx_mm", ascending=False)
-            return "2D ΔL∞/L0 = " + ", ".join(f"{fmt(r.get('final_runout_norm'), '.2f')} (dx = {r['dx_mm']:.0f} mm)"
-                                              for _, r in iso.iterrows())
+            return "2D ΔL∞/L0 of the 1 % volume front = " + ", ".join(
+                f"{fmt(r.get('runout_front_v99', r.get('final_runout_norm')), '.2f')} (dx = {r['dx_mm']:g} mm)"
+                for _, r in iso.iterrows())
         guard("convergence", convergence, "convergence/isph")
     else:
         nums["convergence"] = "not computed yet (convergence/isph missing: run `snakemake -j2 convergence`)"
