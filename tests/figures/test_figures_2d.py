@@ -178,3 +178,19 @@ def test_outflow_particles_are_not_drawn():
     fig = isph2d.fig5(ds, times=[t[late]])
     xs = np.concatenate([ln.get_xdata() for ln in fig.axes[0].lines if len(ln.get_xdata()) > 2])
     assert xs.max() < 1.0
+
+
+def test_convergence_fronts_are_drawn_only_where_their_thickness_is_resolved():
+    """A thickness threshold below two particle layers is not a front of that run (NaN, not drawn)."""
+    from granudep.figures.studies import _front_row
+    rows = {}
+    for dx in (0.004, 0.002, 0.0005):
+        ds = syn.isph_run(dx=dx)
+        ds = ds.assign(final_front_v99=ds["final_front_position"] + 0.01, final_front_5mm=ds["final_front_position"],
+                       final_front_2d=ds["final_front_position"] + 0.02)
+        ds.attrs["d"] = 0.0007
+        rows[dx] = _front_row(ds)
+    assert all(np.isfinite(r["v99"]) for r in rows.values())
+    assert np.isnan(rows[0.004]["5mm"]) and np.isfinite(rows[0.002]["5mm"])      # 5 mm vs 2 dx = 8 / 4 mm
+    assert np.isnan(rows[0.002]["2d"]) and np.isfinite(rows[0.0005]["2d"])        # 1.4 mm vs 4 / 1 mm
+    assert abs(rows[0.0005]["2d"] - rows[0.0005]["v99"] - 0.01 / 0.2) < 1e-12
