@@ -259,7 +259,7 @@ def test_x_inf_is_the_runs_volume_front_unless_another_front_is_named():
     """x_inf (eq 35) defaults to the 1 % volume front: the 2 d attached front of a 2D run is not resolved
     at dx >= 2 d (T22-A70 at 1.4 mm: 2.12 m against a volume front of 3.31 m)."""
     run = strip_run()
-    run = run.assign(final_front_v99=run["final_front_v99"] * 0 + 0.55, final_front_2d=run["final_front_v99"] * 0 + 0.5)
+    run = run.assign(final_front_v99=0.55, final_front_2d=0.5)
     assert monitor(run).attrs["x_inf"] == 0.55
     assert monitor(run, x_inf_front="2d").attrs["x_inf"] == 0.5
     assert monitor(run, x_inf_front="position").attrs["x_inf"] == 0.6

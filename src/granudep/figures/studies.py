@@ -1,9 +1,9 @@
 """Convergence and sensitivity figures (beyond the paper).
 
 ``convergence``: from a list of files of the same case(s) at several resolutions: 2D ISPH runs
-(final runout ΔL/L0 of the robust front measures and the time to rest vs dx), regression critical.csv files (critical times (t_s)_C vs
-dx; dx from a ``dx`` column, else from ``dx<number>`` in the path, else paired in order with the 2D
-runs) and DA runs (final runout and flow time vs particle count).
+(final runout ΔL/L0 of the robust front measures and the time to rest vs dx), regression
+critical.csv files (critical times (t_s)_C vs dx; dx from a ``dx`` column, else from ``dx<number>``
+in the path, else paired in order with the 2D runs) and DA runs (final runout and flow time vs particle count).
 
 ``sensitivity``: from one or more CSVs with columns ``parameter``, ``value`` and any of ``A``,
 ``B``, ``final_runout_norm``, ``flow_time`` (one row per swept value; an optional ``baseline``

@@ -11,7 +11,7 @@ import numpy as np
 from numba import njit, prange
 
 
-from .parallel import PARALLEL, prange_kernel  # noqa: F401  (PARALLEL: the kernels' numba options)
+from .parallel import prange_kernel
 
 
 @njit(cache=True)

@@ -90,11 +90,11 @@ class Snapshots:
     fronts: dict = field(default_factory=lambda: {k: [] for k in FRONT_MEASURE_DOC})
 
 
-#: energy terms stored per snapshot (J m-1), see :mod:`.energy`
 #: the per-particle state besides the positions, one row per granular particle: what the renumbering
 #: (:meth:`IsphSolver._reorder`) permutes and the outflow (:meth:`IsphSolver._remove`) filters
 PARTICLE_FIELDS = ("u", "v", "p", "eta", "gdot", "fs", "p_rheo", "visc_du", "visc_dv", "ids", "wall_an")
 
+#: energy terms stored per snapshot (J m-1), see :mod:`.energy`
 ENERGY_TERMS = ("potential", "dissipated", "wall_friction", "projection", "shifting", "clamps", "outflow")
 
 

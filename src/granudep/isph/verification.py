@@ -223,8 +223,8 @@ def dam_break(quick: bool = False, projection: str | None = None, resolutions=No
         front = np.asarray(snaps.fronts["front_v99"])
         w = (t >= 0.1) & (t <= 0.3)
         speed = float(np.polyfit(t[w], front[w], 1)[0]) if w.sum() >= 3 else float("nan")
-        ritter = 2.0 * math.sqrt(G * 0.114)
-        mm = martin_moyce_comparison(t, snaps.fronts["front_tail"], snaps.fronts["front_v99"])
+        ritter = 2.0 * math.sqrt(G * cfg.geometry.H0)
+        mm = martin_moyce_comparison(t, snaps.fronts["front_tail"], snaps.fronts["front_v99"], a=cfg.geometry.L0)
         rows += [
             _row(name, f"stable to t = 1 s, dx = {dx * 1e3:g} mm (1 = yes)", float(stable), 1.0,
                  0.0 if stable else 1.0, 0.0, f"reached t = {s.t:.3f} s, step {s.step_no}; {status[:160]}"),
@@ -251,7 +251,7 @@ def martin_moyce_1952() -> tuple[np.ndarray, np.ndarray]:
     return data["T"].to_numpy(float), data["Z"].to_numpy(float)
 
 
-def martin_moyce_comparison(t, front_tail, front_v99, a: float = 0.057) -> dict:
+def martin_moyce_comparison(t, front_tail, front_v99, a: float) -> dict:
     """Mean relative difference (Z_sim − Z_exp)/Z_exp of the simulated fronts (m from the back wall,
     sampled at times ``t``) at the measured times that the run covers (no extrapolation)."""
     texp, zexp = martin_moyce_1952()
