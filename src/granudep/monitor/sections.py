@@ -1,6 +1,6 @@
 """Monitoring-section kernels: eq 15 (section velocity), eq 16 (F/D interface), eq 17 (depths).
 
-Pure functions and ``@njit`` kernels only; the time loop and the output live in ``api.py``.
+Pure functions and ``@njit`` kernels only (the neighbour search is the solver's); the time loop and the output live in ``api.py``.
 
 Conventions (slope-aligned frame of the ISPH output: x down-slope along the bed, y bed-normal,
 bed at y = 0; particle centres sit half a spacing Δx inside the material they represent):
@@ -26,6 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..isph.neighbours import build_neighbours
 from ..kernels import wendland_dwdr
 
 #: how the interface height of a section was obtained (variable ``interface_source``)
@@ -46,69 +47,42 @@ def section_centres(L0: float, x_inf: float, n_sections: int = 11) -> np.ndarray
     return L0 + (x_inf - L0) * np.arange(n_sections) / (n_sections - 1)
 
 
-@njit(cache=True)
 def divr_deposited(x, y, deposited, volume, h, mirror):
-    """Eq 16 for every particle, summed over deposited neighbours only (cell list, support 2h).
+    """Eq 16 for every particle, summed over deposited neighbours only (support 2h).
 
     x, y: positions (NaN = absent particle → NaN result); deposited: bool mask; volume: V_j = m/ρ;
     h: smoothing length; mirror: add the images (x_j, −y_j) of deposited particles below the bed.
+    The neighbours come from the solver's own search (:func:`granudep.isph.neighbours.build_neighbours`),
+    run with every present particle as a row and the deposited particles (and their images) as the
+    only sources that count.
     """
-    n = x.size
-    out = np.zeros(n)
-    rc = 2.0 * h
-    xmin = np.inf
-    ymin = np.inf
-    xmax = -np.inf
-    ymax = -np.inf
-    for i in range(n):
-        if math.isfinite(x[i]) and math.isfinite(y[i]):
-            xmin = min(xmin, x[i])
-            xmax = max(xmax, x[i])
-            ymin = min(ymin, y[i])
-            ymax = max(ymax, y[i])
-        else:
-            out[i] = np.nan
-    if not xmax >= xmin:
+    x = np.asarray(x, dtype=np.float64)
+    y = np.asarray(y, dtype=np.float64)
+    out = np.full(x.size, np.nan)
+    present = np.flatnonzero(np.isfinite(x) & np.isfinite(y))
+    if present.size == 0:
         return out
-    nx = int((xmax - xmin) / rc) + 1
-    ny = int((ymax - ymin) / rc) + 1
-    # counting sort of the deposited particles into cells
-    start = np.zeros(nx * ny + 1, dtype=np.int64)
-    cell = np.full(n, -1, dtype=np.int64)
-    for j in range(n):
-        if deposited[j] and math.isfinite(x[j]) and math.isfinite(y[j]):
-            c = int((x[j] - xmin) / rc) * ny + int((y[j] - ymin) / rc)
-            cell[j] = c
-            start[c + 1] += 1
-    for c in range(nx * ny):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
-    order = np.empty(start[-1], dtype=np.int64)
-    for j in range(n):
-        if cell[j] >= 0:
-            order[fill[cell[j]]] = j
-            fill[cell[j]] += 1
+    xa, ya = x[present], y[present]
+    source = np.asarray(deposited, dtype=bool)[present]
+    if mirror:
+        xa = np.concatenate([xa, xa[source]])
+        ya = np.concatenate([ya, -ya[source]])
+        source = np.concatenate([source, np.ones(int(source.sum()), dtype=bool)])
+    start, nbr, _, _, rr = build_neighbours(xa, ya, present.size, 2.0 * h, 0.0)
+    out[present] = _divr_from_sources(start, nbr, rr, source, present.size, volume, h)
+    return out
+
+
+@njit(cache=True)
+def _divr_from_sources(start, nbr, rr, source, n, volume, h):
+    """−Σ_{j source} V r_ij dW/dr(r_ij) over each row's neighbour list (eq 16)."""
+    out = np.zeros(n)
     for i in range(n):
-        if not (math.isfinite(x[i]) and math.isfinite(y[i])):
-            continue
-        ci = int((x[i] - xmin) / rc)
-        cj = int((y[i] - ymin) / rc)
         acc = 0.0
-        for a in range(max(ci - 1, 0), min(ci + 2, nx)):
-            for b in range(max(cj - 1, 0), min(cj + 2, ny)):
-                c = a * ny + b
-                for k in range(start[c], start[c + 1]):
-                    j = order[k]
-                    dx = x[i] - x[j]
-                    dy = y[i] - y[j]
-                    r = math.sqrt(dx * dx + dy * dy)
-                    if 0.0 < r < rc:
-                        acc -= volume * r * wendland_dwdr(r, h)
-                    if mirror:
-                        dym = y[i] + y[j]
-                        rm = math.sqrt(dx * dx + dym * dym)
-                        if 0.0 < rm < rc:
-                            acc -= volume * rm * wendland_dwdr(rm, h)
+        for k in range(start[i], start[i + 1]):
+            if source[nbr[k]]:
+                r = rr[k]
+                acc -= volume * r * wendland_dwdr(r, h)
         out[i] = acc
     return out
 
