@@ -174,7 +174,8 @@ def compact_laplacian_edges(start, nbr, rr, gw, nf, vol, eps2, lap_norm):
 
 
 def adjoint_pair_projection(start, nbr, rx, ry, rr, gw, nf, nw, vol, lmat, wnx, wny, fs, p_fs, us, vs, conc, c0,
-                            relax, dt, rho, eps2, lap_norm, stab, guess, solve, wall_dry, max_passes=1, release=True):
+                            relax, dt, rho, eps2, lap_norm, stab, guess, solve, wall_dry, max_passes=1, release=True,
+                            entries=None):
     """Solve ((1 − ε) D Dᵀ + ε L_c) p = −(ρ/Δt) D u* + s on the interior granular and the wetted wall nodes
     (free-surface particles: p = ``p_fs``; dry or pulling walls: p = 0) and return the node
     pressures (nf + nw), the corrector's G p = −Dᵀ p (x and y), the wall nodes to keep dry at the
@@ -185,9 +186,11 @@ def adjoint_pair_projection(start, nbr, rx, ry, rr, gw, nf, nw, vol, lmat, wnx, 
     Walls, a lagged active set: a wall node that pulls (p < 0) is released, held at p = 0 until the
     flow presses into it again (D u < 0 there after a projection); within a step up to
     ``max_passes`` solves release walls, the last solve is used as it is (a wall may pull for that
-    one step: the energy identity holds for the system actually solved)."""
+    one step: the energy identity holds for the system actually solved). ``entries``: D in COO
+    (:func:`divergence_entries` of these arguments) when the caller has it already."""
     n = nf + nw
-    rows, cols, cx, cy = divergence_entries(start, nbr, rx, ry, gw, nf, vol, lmat, wnx, wny)
+    rows, cols, cx, cy = (entries if entries is not None
+                          else divergence_entries(start, nbr, rx, ry, gw, nf, vol, lmat, wnx, wny))
     ei, ej, ea = compact_laplacian_edges(start, nbr, rr, gw, nf, vol, eps2, lap_norm)
     b = -(rho / dt) * apply_divergence(n, rows, cols, cx, cy, us, vs)
     b[:nf] -= relax * rho / (dt * dt) * np.minimum(1.0 - conc / c0, 0.0)

@@ -8,12 +8,16 @@ numba kernels of :mod:`granudep.isph.operators`, :mod:`~granudep.isph.walls`,
 1. neighbour list (cell-linked, rebuilt every step), ∇·r, concentration, renormalisation;
    free-surface particles: ∇·r < ``free_surface_threshold``;
 2. rheology from uⁿ, pⁿ: η = μ(I) p/|γ̇| capped at η_max (or Newtonian η);
-3. predictor, implicit in the viscous stress: (I − Δt/ρ ∇·η∇) u* = uⁿ + Δt g (one sparse matrix,
-   two right-hand sides), g = (g sin θ, −g cos θ);
+3. predictor, implicit in the viscous stress: (I − Δt/ρ ∇·η∇) u* = uⁿ + Δt g − Δt/ρ G pⁿ (one
+   sparse matrix, two right-hand sides), g = (g sin θ, −g cos θ); the previous pressure's gradient
+   G pⁿ only with ``numerics.pressure_correction: incremental`` (the default with the adjoint pair;
+   Goda 1979, van Kan 1986), so that the viscous stress and the wall friction act on a velocity the
+   pressure already nearly balances;
 4. projection (default ``numerics.projection: adjoint_pair``, :mod:`.projection`): PPE
    ((1 − ε) D Dᵀ + ε L_c) p = −ρ/Δt D u* (+ density-invariant source) over the granular and the
-   wetted wall nodes, Dirichlet p_fs on the free surface, solved by two-level CG; corrector
-   uⁿ⁺¹ = u* + Δt/ρ Dᵀ p, energy-stable. ``approximate`` (before session 7): compact PPE
+   wetted wall nodes, Dirichlet p_fs on the free surface, solved by two-level CG, for the velocity
+   u* + Δt/ρ G pⁿ (incremental) or u*; corrector uⁿ⁺¹ = u* − Δt/ρ G (pⁿ⁺¹ − pⁿ) (or − Δt/ρ G pⁿ⁺¹),
+   G = −Dᵀ, energy-stable. ``approximate`` (before session 7): compact PPE
    Σ a_ij (p_i − p_j) = −ρ/Δt ∇·u*, mirror-pressure Neumann walls, renormalised difference gradient;
 5. positions xⁿ⁺¹ = xⁿ + Δt uⁿ⁺¹ + δr (particle shifting).
 """
@@ -35,7 +39,8 @@ from . import operators, ppe, shifting, viscous, walls
 from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_work, viscous_dissipation
 from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
-from .projection import adjoint_divergence, adjoint_pair_projection, wall_normal_acceleration
+from .projection import (adjoint_divergence, adjoint_pair_projection, apply_gradient, divergence_entries,
+                         wall_normal_acceleration)
 from .linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pcg_two_level,
                        pin_blas_to_one_thread)
 from .neighbours import build_neighbours
@@ -260,10 +265,21 @@ class IsphSolver:
         geo = self._geometry(nb)
         self._rheology(nb, geo)
         t2 = _time.perf_counter()
-        us, vs = self._predictor(nb, geo, dt)
+        # free-surface particles: diagonal renormalisation only (1/M_xx, 1/M_yy); with one-sided
+        # support the full inverse mixes the wall-normal pressure gradient into the tangential one
+        lmat_p = operators.lmat_pressure(geo.lmat, self.fs, *geo.mdiag)
+        dmat = self._divergence_matrix(nb, geo, lmat_p)
+        gp_old = self._old_pressure_gradient(dmat)
+        t_div = _time.perf_counter()
+        us, vs = self._predictor(nb, geo, dt, gp_old)
+        if gp_old is not None:
+            # the projection sees the velocity without the old pressure impulse, so that it solves
+            # for the whole pⁿ⁺¹ and uⁿ⁺¹ = u* − Δt/ρ G (pⁿ⁺¹ − pⁿ)
+            us = us + dt / self.rho * gp_old[0]
+            vs = vs + dt / self.rho * gp_old[1]
         t3 = _time.perf_counter()
         u_old, v_old = self.u, self.v
-        self._projection(nb, geo, us, vs, dt)
+        self._projection(nb, geo, lmat_p, dmat, us, vs, dt)
         t4 = _time.perf_counter()
         self._shift_and_move(nb, geo, u_old, v_old, us, vs, dt)
         t5 = _time.perf_counter()
@@ -271,8 +287,8 @@ class IsphSolver:
         st.steps += 1
         st.t_neigh += t1 - t0
         st.t_kern += (t2 - t1) + (t5 - t4)
-        st.t_visc += t3 - t2
-        st.t_ppe += t4 - t3
+        st.t_visc += t3 - t_div
+        st.t_ppe += (t4 - t3) + (t_div - t2)
         self.nf_at_energy = self.nf
         self._check()
         self._check_energy()
@@ -324,9 +340,33 @@ class IsphSolver:
             self.eta, self.gdot = regularised_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2,
                                                         rh.mu_inf, m.I0, *self.reg, rh.eta_min, rh.eta_max)
 
-    def _predictor(self, nb: Neighbours, geo: Geometry, dt: float):
+    @property
+    def incremental(self) -> bool:
+        """The predictor carries −Δt/ρ G pⁿ (``numerics.pressure_correction``; auto: with the adjoint pair)."""
+        n = self.cfg.numerics
+        return n.pressure_correction == "incremental" or (n.pressure_correction == "auto"
+                                                          and n.projection == "adjoint_pair")
+
+    def _divergence_matrix(self, nb: Neighbours, geo: Geometry, lmat_p):
+        """Stage 2b (adjoint pair): the divergence D in COO (:func:`projection.divergence_entries`),
+        shared by the old pressure gradient and the projection; None with the approximate projection."""
+        if self.cfg.numerics.projection != "adjoint_pair":
+            return None
+        return divergence_entries(nb.start, nb.nbr, nb.rx, nb.ry, geo.gw, self.nf, self.vol, lmat_p,
+                                  self.parts.wnx, self.parts.wny)
+
+    def _old_pressure_gradient(self, dmat):
+        """G pⁿ = −Dᵀ pⁿ on the current geometry with the previous step's granular and wall pressures
+        (incremental pressure correction); None when not incremental and at the first step (no wall
+        pressures yet)."""
+        if dmat is None or not self.incremental or self.p_wall is None or self.p_wall.size != self.parts.wnx.size:
+            return None
+        return apply_gradient(self.nf, *dmat, np.concatenate((self.p, self.p_wall)))
+
+    def _predictor(self, nb: Neighbours, geo: Geometry, dt: float, gp_old=None):
         """Stage 3: the predictor u*, implicit in the viscous stress, with the Coulomb wall drag in its
-        diagonal; books the viscous and wall-friction dissipation. Returns (u*, v*)."""
+        diagonal and (``gp_old``, incremental) the old pressure impulse −Δt/ρ G pⁿ on its right-hand
+        side; books the viscous and wall-friction dissipation. Returns (u*, v*)."""
         c = self.cfg
         nf, rho = self.nf, self.rho
         start, nbr, rx, ry, rr = nb
@@ -355,14 +395,19 @@ class IsphSolver:
             data[indptr[:-1]] = diag_u
             wall_du = diag_u - wall_du
             wall_dv = diag_v - wall_dv
+        # the velocity the viscous step starts from: uⁿ, less the old pressure impulse (incremental)
+        u0, v0 = self.u, self.v
+        if gp_old is not None:
+            u0 = self.u - dt / rho * gp_old[0]
+            v0 = self.v - dt / rho * gp_old[1]
         if c.numerics.viscous_solver == "direct":
             data_v = data.copy()
             data_v[indptr[:-1]] = diag_v
-            us = self._direct(indptr, indices, data, self.u + dt * self.gx, "viscous (u)")
-            vs = self._direct(indptr, indices, data_v, self.v + dt * self.gy, "viscous (v)")
+            us = self._direct(indptr, indices, data, u0 + dt * self.gx, "viscous (u)")
+            vs = self._direct(indptr, indices, data_v, v0 + dt * self.gy, "viscous (v)")
         else:
-            bu = self.u + dt * self.gx
-            bv = self.v + dt * self.gy
+            bu = u0 + dt * self.gx
+            bv = v0 + dt * self.gy
             dic = c.numerics.viscous_solver == "cg_dic"
             xu0, xv0 = bu, bv
             if dic and self.visc_du is not None:
@@ -377,20 +422,19 @@ class IsphSolver:
             self.visc_dv = vs - bv
             self.visc_dt = dt
         eb = self.energy
-        eb.dissipated += viscous_dissipation(self.m, self.u, self.v, us, vs, dt, self.gx, self.gy)
+        # the work of the viscous operator on u* (the old pressure impulse is the projection's, booked
+        # there: its pressure work is taken on u* + Δt/ρ G pⁿ)
+        eb.dissipated += viscous_dissipation(self.m, u0, v0, us, vs, dt, self.gx, self.gy)
         if wall_du is not None:
             # the Coulomb wall's share: its diagonal increments times u*² (the drag's work)
             eb.wall_friction += self.m * float(np.dot(wall_du, us * us) + np.dot(wall_dv, vs * vs))
         return us, vs
 
-    def _projection(self, nb: Neighbours, geo: Geometry, us, vs, dt: float) -> None:
+    def _projection(self, nb: Neighbours, geo: Geometry, lmat_p, dmat, us, vs, dt: float) -> None:
         """Stage 4: the pressure projection of u* (adjoint pair or approximate): pⁿ⁺¹ and uⁿ⁺¹."""
         start, nbr, rx, ry, rr = nb
-        # free-surface particles: diagonal renormalisation only (1/M_xx, 1/M_yy); with one-sided
-        # support the full inverse mixes the wall-normal pressure gradient into the tangential one
-        lmat_p = operators.lmat_pressure(geo.lmat, self.fs, *geo.mdiag)
         if self.cfg.numerics.projection == "adjoint_pair":
-            self._project_adjoint_pair(start, nbr, rx, ry, rr, geo.gw, lmat_p, geo.conc, us, vs, dt)
+            self._project_adjoint_pair(start, nbr, rx, ry, rr, geo.gw, lmat_p, dmat, geo.conc, us, vs, dt)
         else:
             self._project_approximate(start, nbr, rx, ry, rr, geo.gw, geo.lmat, lmat_p, geo.conc, us, vs, dt,
                                       geo.detached)
@@ -423,7 +467,6 @@ class IsphSolver:
                       + potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy))
             eb.clamps += e_mech - e_before
         self.e_mech = e_mech
-        self._last_us = (us, vs, dt)
         self.t += dt
         self.step_no += 1
 
@@ -454,7 +497,7 @@ class IsphSolver:
         self.u = us - dt / rho * gpx
         self.v = vs - dt / rho * gpy
 
-    def _project_adjoint_pair(self, start, nbr, rx, ry, rr, gw, lmat_p, conc, us, vs, dt):
+    def _project_adjoint_pair(self, start, nbr, rx, ry, rr, gw, lmat_p, dmat, conc, us, vs, dt):
         """Adjoint-pair projection (:func:`projection.adjoint_pair_projection`): G = −Dᵀ, walls carry
         pressure; the pressure cannot raise the kinetic energy except through the free-surface
         Dirichlet value and the density source (docs/paper-notes.md, session 6)."""
@@ -470,7 +513,7 @@ class IsphSolver:
             start, nbr, rx, ry, rr, gw, nf, nw, self.vol, lmat_p, self.parts.wnx, self.parts.wny, self.fs, self.p_fs, us, vs, conc, self.c0,
             self.density_relaxation(dt), dt, self.rho, self.eps2, self.lap_norm,
             c.numerics.projection_stabilisation, guess, self._solve_ppe, self.wall_dry,
-            release=c.numerics.wall_release)
+            release=c.numerics.wall_release, entries=dmat)
         self.stats.walls_released += released
         self.p = p[:nf]
         self.p_wall = p[nf:]
@@ -529,7 +572,6 @@ class IsphSolver:
         self.x[:nf] = self.x[:nf][perm]
         self.y[:nf] = self.y[:nf][perm]
         self._take_rows(perm)
-        self._last_us = None
         self.permuted = True
 
     def _solve_ppe(self, indptr, indices, data, rhs, guess):
