@@ -359,7 +359,7 @@ class IsphSolver:
         """G pⁿ = −Dᵀ pⁿ on the current geometry with the previous step's granular and wall pressures
         (incremental pressure correction); None when not incremental and at the first step (no wall
         pressures yet)."""
-        if dmat is None or not self.incremental or self.p_wall is None or self.p_wall.size != self.parts.wnx.size:
+        if dmat is None or not self.incremental or self.p_wall is None:
             return None
         return apply_gradient(self.nf, *dmat, np.concatenate((self.p, self.p_wall)))
 
