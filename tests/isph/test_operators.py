@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from granudep.isph import operators
+from granudep.isph.bundles import Pairs, WallSurface
 from granudep.isph.neighbours import build_neighbours
 
 import naive_isph as naive
@@ -26,11 +27,12 @@ def _cloud(n_side=11, jitter=0.2, seed=0, walls=False):
         x, y = np.concatenate((x, wx.ravel())), np.concatenate((y, wy.ravel()))
     start, nbr, rx, ry, rr = build_neighbours(x, y, nf, 2.0 * H, 0.0)
     wk, gw = operators.pair_kernel(rr, H)
-    return dict(x=x, y=y, nf=nf, start=start, nbr=nbr, rx=rx, ry=ry, rr=rr, wk=wk, gw=gw)
+    return dict(x=x, y=y, nf=nf, start=start, nbr=nbr, rx=rx, ry=ry, rr=rr, wk=wk, gw=gw,
+                pairs=Pairs(start, nbr, rx, ry, rr, wk, gw))
 
 
 def _geometry(c):
-    return operators.geometry_terms(c["start"], c["rx"], c["ry"], c["rr"], c["wk"], c["gw"], c["nf"], H, VOL)
+    return operators.geometry_terms(c["pairs"], c["nf"], H, VOL)
 
 
 @pytest.mark.parametrize("walls", [False, True])
@@ -75,18 +77,18 @@ def test_velocity_gradient_and_divergence_are_exact_for_a_linear_field_up_to_the
     u = 0.3 + a[0, 0] * x + a[0, 1] * y
     v = -0.2 + a[1, 0] * x + a[1, 1] * y
     empty = np.zeros(0)
-    grad = operators.velocity_gradient(c["start"], c["nbr"], c["rx"], c["ry"], c["gw"], nf, VOL, x, y, u, v, lmat,
-                                       empty, empty, empty, 0, 0.0, DX)
+    grad = operators.velocity_gradient(c["pairs"], nf, VOL, x, y, u, v, lmat,
+                                       WallSurface(empty, empty, empty), 0, 0.0, DX)
     renorm = ~np.all(np.isclose(lmat, [1.0, 0.0, 0.0, 1.0]), axis=1)
     assert renorm.sum() > 0.6 * nf
     np.testing.assert_allclose(grad[renorm], np.broadcast_to(a.ravel(), (renorm.sum(), 4)), rtol=1e-9, atol=1e-9)
-    div = operators.divergence(c["start"], c["nbr"], c["rx"], c["ry"], c["gw"], nf, VOL, u, v, lmat)
+    div = operators.divergence(c["pairs"], nf, VOL, u, v, lmat)
     np.testing.assert_allclose(div[renorm], np.trace(a), rtol=1e-9)
     # and each agrees with the plain-NumPy gradient on any field
     f = np.random.default_rng(5).normal(size=x.size)
     ref = naive.granular_gradient(x, y, nf, H, VOL, f, lmat)
-    grad_f = operators.velocity_gradient(c["start"], c["nbr"], c["rx"], c["ry"], c["gw"], nf, VOL, x, y, f, f, lmat,
-                                         empty, empty, empty, 0, 0.0, DX)
+    grad_f = operators.velocity_gradient(c["pairs"], nf, VOL, x, y, f, f, lmat,
+                                         WallSurface(empty, empty, empty), 0, 0.0, DX)
     np.testing.assert_allclose(grad_f[:, :2], ref, rtol=1e-10, atol=1e-10 * np.abs(ref).max())
 
 
@@ -97,8 +99,8 @@ def test_pressure_gradient_is_exact_for_a_linear_pressure_without_walls():
     lmat = _geometry(c)[4]
     p = 50.0 + 3.0e3 * x - 9.81e3 * y
     empty = np.zeros(0)
-    gpx, gpy = operators.pressure_gradient(c["start"], c["nbr"], c["rx"], c["ry"], c["gw"], nf, VOL, p, np.zeros(nf),
-                                           np.zeros(nf), lmat, empty, empty, 1e-4, 1000.0, np.zeros(nf, np.bool_))
+    gpx, gpy = operators.pressure_gradient(c["pairs"], nf, VOL, p, np.zeros(nf),
+                                           np.zeros(nf), lmat, WallSurface(empty, empty, empty), 1e-4, 1000.0, np.zeros(nf, np.bool_))
     renorm = ~np.all(np.isclose(lmat, [1.0, 0.0, 0.0, 1.0]), axis=1)
     np.testing.assert_allclose(gpx[renorm], 3.0e3, rtol=1e-9)
     np.testing.assert_allclose(gpy[renorm], -9.81e3, rtol=1e-9)
@@ -109,11 +111,11 @@ def test_smoothed_gradient_and_shepard_average_match_the_kernel_means():
     nf = c["nf"]
     rng = np.random.default_rng(9)
     fx, fy = rng.normal(size=nf), rng.normal(size=nf)
-    sx, sy = operators.smoothed_gradient(c["start"], c["nbr"], c["wk"], nf, H, fx, fy)
+    sx, sy = operators.smoothed_gradient(c["pairs"], nf, H, fx, fy)
     np.testing.assert_allclose(sx, naive.shepard(c["x"], c["y"], nf, H, fx), rtol=1e-12)
     np.testing.assert_allclose(sy, naive.shepard(c["x"], c["y"], nf, H, fy), rtol=1e-12)
     f = rng.normal(size=nf)
-    np.testing.assert_allclose(operators.shepard_average(c["start"], c["nbr"], c["wk"], nf, H, f),
+    np.testing.assert_allclose(operators.shepard_average(c["pairs"], nf, H, f),
                                naive.shepard(c["x"], c["y"], nf, H, f), rtol=1e-12)
 
 

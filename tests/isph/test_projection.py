@@ -2,7 +2,7 @@
 import numpy as np
 
 from granudep.isph import operators
-from granudep.isph.neighbours import build_neighbours
+from granudep.isph.bundles import WallSurface, pairs_of
 from granudep.isph.projection import adjoint_divergence
 
 
@@ -19,9 +19,8 @@ def test_adjoint_divergence_is_minus_the_transpose_of_the_gradient():
     nf = x.size
     h = 1.3 * dx
     vol = dx * dx
-    start, nbr, rx, ry, rr = build_neighbours(x, y, nf, 2.0 * h, 0.0)
-    wk, gw = operators.pair_kernel(rr, h)
-    _, _, _, _, lmat, _ = operators.geometry_terms(start, rx, ry, rr, wk, gw, nf, h, vol)
+    pairs = pairs_of(x, y, nf, 2.0 * h, 0.0, h)
+    _, _, _, _, lmat, _ = operators.geometry_terms(pairs, nf, h, vol)
     zeros = np.zeros(nf)
     empty = np.zeros(0)
     detached = np.zeros(nf, np.bool_)
@@ -31,12 +30,12 @@ def test_adjoint_divergence_is_minus_the_transpose_of_the_gradient():
     for k in range(nf):
         e = np.zeros(nf)
         e[k] = 1.0
-        a, b = operators.pressure_gradient(start, nbr, rx, ry, gw, nf, vol, e, zeros, zeros, lmat, empty, empty, 1e-3,
+        a, b = operators.pressure_gradient(pairs, nf, vol, e, zeros, zeros, lmat, WallSurface(empty, empty, empty), 1e-3,
                                            1000.0, detached)
         gxm[:, k], gym[:, k] = a, b
     rng = np.random.default_rng(1)
     u, v = rng.normal(size=nf), rng.normal(size=nf)
-    d = adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, u, v, lmat)
+    d = adjoint_divergence(pairs, nf, vol, u, v, lmat)
     assert np.allclose(d, -(gxm.T @ u + gym.T @ v), rtol=1e-10, atol=1e-10 * np.abs(d).max())
 
 
@@ -48,19 +47,18 @@ def _setup(jitter, n_side=13, seed=2):
     y = gy.ravel() + rng.uniform(-jitter, jitter, gy.size) * dx + 0.05
     nf = x.size
     h = 1.3 * dx
-    start, nbr, rx, ry, rr = build_neighbours(x, y, nf, 2.0 * h, 0.0)
-    wk, gw = operators.pair_kernel(rr, h)
-    _, _, _, _, lmat, _ = operators.geometry_terms(start, rx, ry, rr, wk, gw, nf, h, dx * dx)
+    pairs = pairs_of(x, y, nf, 2.0 * h, 0.0, h)
+    _, _, _, _, lmat, _ = operators.geometry_terms(pairs, nf, h, dx * dx)
     cx, cy = x - x.mean(), y - y.mean()
     inner = (np.abs(cx) < 2.5 * dx) & (np.abs(cy) < 2.5 * dx)
-    return x, y, dx, start, nbr, rx, ry, rr, gw, lmat, inner
+    return x, y, dx, pairs, lmat, inner
 
 
 def test_adjoint_divergence_is_exact_for_linear_fields_on_a_lattice():
-    x, y, dx, start, nbr, rx, ry, rr, gw, lmat, inner = _setup(0.0)
+    x, y, dx, pairs, lmat, inner = _setup(0.0)
     u = 0.3 + 2.0 * x - 1.0 * y
     v = -0.1 + 0.5 * x + 3.0 * y                          # div = 5
-    d = adjoint_divergence(start, nbr, rx, ry, gw, x.size, dx * dx, u, v, lmat)
+    d = adjoint_divergence(pairs, x.size, dx * dx, u, v, lmat)
     assert np.allclose(d[inner], 5.0, rtol=1e-9)
 
 
@@ -68,12 +66,12 @@ def test_adjoint_divergence_sees_a_uniform_translation_on_a_disordered_cloud():
     """Why it is not the default: on a disordered cloud Σ_j V ∇W_kj ≠ 0, and the adjoint of the
     renormalised gradient reads a uniform translation as divergence (the renormalised divergence
     reads exactly 0)."""
-    x, y, dx, start, nbr, rx, ry, rr, gw, lmat, inner = _setup(0.2)
+    x, y, dx, pairs, lmat, inner = _setup(0.2)
     nf = x.size
     u = np.full(nf, 1.0)
     v = np.zeros(nf)
-    d_adj = adjoint_divergence(start, nbr, rx, ry, gw, nf, dx * dx, u, v, lmat)
-    d_ren = operators.divergence(start, nbr, rx, ry, gw, nf, dx * dx, u, v, lmat)
+    d_adj = adjoint_divergence(pairs, nf, dx * dx, u, v, lmat)
+    d_ren = operators.divergence(pairs, nf, dx * dx, u, v, lmat)
     assert np.max(np.abs(d_ren[inner])) < 1e-9
     assert np.sqrt(np.mean(d_adj[inner] ** 2)) > 1.0        # 1/s for 1 m/s: O(disorder / h)
 
@@ -97,12 +95,12 @@ def _walled_cloud(jitter=0.15, n_side=10, seed=3):
     y = np.concatenate((yf, wyg.ravel()))
     nw = wxg.size
     h = 1.3 * dx
-    start, nbr, rx, ry, rr = build_neighbours(x, y, nf, 2.0 * h, 0.0)
-    wk, gw = operators.pair_kernel(rr, h)
-    _, _, _, _, lmat, _ = operators.geometry_terms(start, rx, ry, rr, wk, gw, nf, h, dx * dx)
+    pairs = pairs_of(x, y, nf, 2.0 * h, 0.0, h)
+    _, _, _, _, lmat, _ = operators.geometry_terms(pairs, nf, h, dx * dx)
     wnx, wny = np.zeros(nw), np.ones(nw)
-    return dict(x=x, y=y, nf=nf, nw=nw, dx=dx, h=h, start=start, nbr=nbr, rx=rx, ry=ry, rr=rr, gw=gw,
-                lmat=lmat, wnx=wnx, wny=wny)
+    return dict(x=x, y=y, nf=nf, nw=nw, dx=dx, h=h, start=pairs.start, nbr=pairs.nbr, rx=pairs.rx, ry=pairs.ry,
+                rr=pairs.rr, gw=pairs.gw, lmat=lmat, wnx=wnx, wny=wny, pairs=pairs,
+                walls=WallSurface(wnx, wny, np.zeros(nw)))
 
 
 def _naive_d(c):
@@ -134,8 +132,7 @@ def _naive_d(c):
 
 
 def _coo(c):
-    return pj.divergence_entries(c["start"], c["nbr"], c["rx"], c["ry"], c["gw"], c["nf"], c["dx"] ** 2, c["lmat"],
-                                 c["wnx"], c["wny"])
+    return pj.divergence_entries(c["pairs"], c["nf"], c["dx"] ** 2, c["lmat"], c["walls"])
 
 
 def test_adjoint_pair_divergence_matches_the_pairwise_formula_and_its_gradient_is_minus_the_transpose():
@@ -181,8 +178,7 @@ def _project(c, stab, us, vs, fs=None, dt=1e-3, rho=1000.0, passes=8):
             m[r, indices[indptr[r]:indptr[r + 1]]] += data[indptr[r]:indptr[r + 1]]
         return np.linalg.lstsq(m, rhs, rcond=1e-13)[0]
 
-    return pj.adjoint_pair_projection(c["start"], c["nbr"], c["rx"], c["ry"], c["rr"], c["gw"], nf, nw, c["dx"] ** 2,
-                                      c["lmat"], c["wnx"], c["wny"], fs, 0.0, us, vs, conc, 1.0, 0.0, dt, rho,
+    return pj.adjoint_pair_projection(c["pairs"], nf, nw, c["dx"] ** 2, c["lmat"], c["walls"], fs, 0.0, us, vs, conc, 1.0, 0.0, dt, rho,
                                       0.01 * c["h"] ** 2, 1.0, stab, np.zeros(nf + nw), solve,
                                       np.zeros(nw, np.bool_), max_passes=passes)
 
@@ -191,7 +187,7 @@ def test_adjoint_pair_matrix_equals_the_dense_product_plus_the_compact_laplacian
     c = _walled_cloud()
     nf, nw, n = c["nf"], c["nw"], c["nf"] + c["nw"]
     rows, cols, cx, cy = _coo(c)
-    ei, ej, ea = pj.compact_laplacian_edges(c["start"], c["nbr"], c["rr"], c["gw"], nf, c["dx"] ** 2,
+    ei, ej, ea = pj.compact_laplacian_edges(c["pairs"], nf, c["dx"] ** 2,
                                             0.01 * c["h"] ** 2, 1.0)
     dxm, dym = _naive_d(c)
     lc = np.zeros((n, n))
@@ -220,6 +216,12 @@ def test_adjoint_pair_matrix_equals_the_dense_product_plus_the_compact_laplacian
     assert np.allclose(dense, full[np.ix_(unk, unk)], atol=1e-12 * np.abs(full).max())
     assert np.allclose(rhs, b[unk] - full[np.ix_(unk, np.flatnonzero(known))] @ p[known],
                        atol=1e-10 * np.abs(rhs).max())
+    # the node blocks of the threads (one per numba thread) do not change a bit of it
+    for nblock in (2, 3, 7):
+        got = pj._assemble_blocks.serial(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b,
+                                         nblock)
+        for a, e in zip(got, (indptr, indices, data, rhs)):
+            assert a.dtype == e.dtype and np.array_equal(a, e), nblock
 
 
 def test_adjoint_pair_projection_never_raises_the_kinetic_energy_and_removes_the_divergence():

@@ -4,7 +4,7 @@ import numpy as np
 from granudep.isph import operators, shifting
 from granudep.isph import verification as v
 from granudep.isph.config import load_config
-from granudep.isph.neighbours import build_neighbours
+from granudep.isph.bundles import Pairs, pairs_of
 from granudep.isph.solver import IsphSolver
 
 
@@ -15,11 +15,10 @@ def _layer(dx):
 
 def _layer_terms(s):
     nf = s.nf
-    start, nbr, rx, ry, rr = build_neighbours(s.x, s.y, nf, s.radius, s.period)
-    wk, gw = operators.pair_kernel(rr, s.h)
-    divr, conc, gcx, gcy, lmat, _ = operators.geometry_terms(start, rx, ry, rr, wk, gw, nf, s.h, s.vol)
+    pairs = pairs_of(s.x, s.y, nf, s.radius, s.period, s.h)
+    divr, conc, gcx, gcy, lmat, _ = operators.geometry_terms(pairs, nf, s.h, s.vol)
     fs = divr < s.cfg.numerics.free_surface_threshold
-    return start, nbr, wk, gcx, gcy, fs
+    return pairs, gcx, gcy, fs
 
 
 def test_surface_band_covers_the_layers_with_a_truncated_support():
@@ -27,10 +26,10 @@ def test_surface_band_covers_the_layers_with_a_truncated_support():
     (1 and 2 dx below it) get α = 1, deeper layers 0: the band is the truncated support."""
     dx = 0.002
     s = _layer(dx)
-    start, nbr, wk, _, _, fs = _layer_terms(s)
+    pairs, _, _, fs = _layer_terms(s)
     layer = np.round((0.02 - dx / 2 - s.y[:s.nf]) / dx).astype(int)   # 0 = top
     assert fs[layer == 0].all() and not fs[layer > 0].any()
-    alpha = shifting.surface_band(start, nbr, wk, s.nf, fs, s.h, 2.0 * dx)
+    alpha = shifting.surface_band(pairs, s.nf, fs, s.h, 2.0 * dx)
     assert np.allclose(alpha[layer <= 2], 1.0) and np.allclose(alpha[layer >= 3], 0.0)
 
 
@@ -40,8 +39,9 @@ def test_surface_band_is_continuous_at_the_edge_of_the_support():
     for r in (2 * h - 1e-3, 2 * h - 1e-6):
         start = np.array([0, 1, 1])
         nbr = np.array([1])
-        wk, _ = operators.pair_kernel(np.array([r]), h)
-        alpha = shifting.surface_band(start, nbr, wk, 2, np.array([False, True]), h, 2.0 * dx)
+        wk, gw = operators.pair_kernel(np.array([r]), h)
+        pairs = Pairs(start, nbr, np.array([-r]), np.zeros(1), np.array([r]), wk, gw)
+        alpha = shifting.surface_band(pairs, 2, np.array([False, True]), h, 2.0 * dx)
         assert 0.0 < alpha[0] < 1e-5
 
 
@@ -51,12 +51,12 @@ def test_shift_below_the_surface_loses_its_normal_part():
     band it is shifted along the surface only."""
     dx = 0.002
     s = _layer(dx)
-    start, nbr, wk, gcx, gcy, fs = _layer_terms(s)
+    pairs, gcx, gcy, fs = _layer_terms(s)
     s.u[:] = 1.0
-    ncx, ncy = operators.smoothed_gradient(start, nbr, wk, s.nf, s.h, gcx, gcy)
+    ncx, ncy = operators.smoothed_gradient(pairs, s.nf, s.h, gcx, gcy)
     layer = np.round((0.02 - dx / 2 - s.y[:s.nf]) / dx).astype(int)
     dt = 1e-4
-    alpha = shifting.surface_band(start, nbr, wk, s.nf, fs, s.h, 2.0 * dx)
+    alpha = shifting.surface_band(pairs, s.nf, fs, s.h, 2.0 * dx)
     _, sy_band = shifting.shifting(s.nf, gcx, gcy, s.u, s.v, alpha, s.h, dt, 2.0, dx, ncx, ncy)
     _, sy_surf = shifting.shifting(s.nf, gcx, gcy, s.u, s.v, fs.astype(float), s.h, dt, 2.0, dx, ncx, ncy)
     below = layer == 1

@@ -156,7 +156,6 @@ def _diag_first(indptr, indices, data):
     return d
 
 
-@njit(cache=True)
 def pcg_jacobi(indptr, indices, data, b, x0, rtol, atol, maxiter):
     """Solve A x = b (A symmetric positive definite, CSR, diagonal stored first in each row)."""
     x, r, dinv, thresh, zero, status = _start(indptr, indices, data, _diag_first(indptr, indices, data), b, x0,
@@ -170,11 +169,13 @@ def pcg_jacobi(indptr, indices, data, b, x0, rtol, atol, maxiter):
                      np.empty(0, np.int64), True)
 
 
-@njit(cache=True)
+@prange_kernel
 def _pcg_loop(indptr, indices, data, x, r, dinv, thresh, maxiter, lc, lct, agg, blas_dot):
     """The CG iteration from the initial state (x, r): preconditioner z = D⁻¹ r, plus the coarse
     correction P A_c⁻¹ Pᵀ r when ``lc`` (the Cholesky factor of A_c, :func:`pcg_two_level`) is not
     empty; dot products by ``np.dot`` (``blas_dot``: scipy's iterates bit for bit) or :func:`_dot`.
+    The product A p runs over the rows in parallel (``prange``), each row summed as
+    :func:`csr_matvec` does, so the iterates do not depend on the thread count.
     Returns (x, iterations, info) as :func:`pcg_jacobi`."""
     n = x.size
     nc = lc.shape[0]
@@ -202,7 +203,11 @@ def _pcg_loop(indptr, indices, data, x, r, dinv, thresh, maxiter, lc, lct, agg, 
                 p[i] = p[i] * beta + z[i]
         else:
             p[:] = z
-        csr_matvec(indptr, indices, data, p, q)
+        for i in prange(n):                 # q = A p (csr_matvec, row-parallel)
+            s = 0.0
+            for k in range(indptr[i], indptr[i + 1]):
+                s += data[k] * p[indices[k]]
+            q[i] = s
         pq = np.dot(p, q) if blas_dot else _dot(p, q)
         if not pq > 0.0:
             return x, it, BREAKDOWN  # zero/negative curvature: A singular or indefinite
@@ -905,7 +910,6 @@ def _two_level_apply(lc, lct, agg, dinv, r, z, rc, yc):
         z[i] = dinv[i] * r[i] + rc[agg[i]]
 
 
-@njit(cache=True)
 def pcg_two_level(indptr, indices, data, b, x0, rtol, atol, maxiter):
     """Solve A x = b (SPD, CSR, diagonal first) by CG preconditioned with Jacobi plus the
     aggregation coarse space above (set up from A on every call). Same stopping test, return
@@ -917,14 +921,23 @@ def pcg_two_level(indptr, indices, data, b, x0, rtol, atol, maxiter):
         return x, 0, 0
     if status != 0:
         return x, 0, status
+    agg, lc, lct, ok = _two_level_setup(indptr, indices, data)
+    if not ok:
+        return x, 0, BREAKDOWN
+    return _pcg_loop(indptr, indices, data, x, r, dinv, thresh, maxiter, lc, lct, agg, False)
+
+
+@njit(cache=True)
+def _two_level_setup(indptr, indices, data):
+    """The aggregates, the Cholesky factor L of A_c and Lᵀ (C-ordered), and whether A_c is positive
+    definite (a non-positive diagonal or pivot, or NaN: not)."""
     agg, nc = aggregate_nodes(indptr, indices, data)
     ac = coarse_matrix(indptr, indices, data, agg, nc)
     for i in range(nc):                  # Cholesky needs a positive diagonal at least
         if not ac[i, i] > 0.0:
-            return x, 0, BREAKDOWN
+            return agg, ac, ac, False
     lc = np.linalg.cholesky(ac)
     for i in range(nc):
         if not lc[i, i] > 0.0:           # NaN pivots: A_c not positive definite
-            return x, 0, BREAKDOWN
-    return _pcg_loop(indptr, indices, data, x, r, dinv, thresh, maxiter, lc, np.ascontiguousarray(lc.T), agg,
-                     False)
+            return agg, lc, lc, False
+    return agg, lc, np.ascontiguousarray(lc.T), True

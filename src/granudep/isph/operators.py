@@ -24,8 +24,7 @@ from .walls import SLIP_COULOMB, wall_beta_linear
 @prange_kernel
 def pair_kernel(rr, h):
     """W(r_ij) and (dW/dr)/r (0 at r < 1e-12 h) of every pair of the neighbour list, once per step for
-    all the kernels below (each evaluated them again: 0.13 ms per kernel and step at 75k pairs).
-    The same expressions in the same order as :func:`wendland_w` and :func:`wendland_dwdr`: bit for bit."""
+    all the kernels below (:class:`bundles.Pairs`). The same expressions in the same order as :func:`wendland_w` and :func:`wendland_dwdr`: bit for bit."""
     n = rr.size
     w = np.empty(n)
     gw = np.empty(n)
@@ -43,9 +42,10 @@ def pair_kernel(rr, h):
 
 
 @prange_kernel
-def shepard_average(start, nbr, wk, nf, h, f):
+def shepard_average(pairs, nf, h, f):
     """Kernel (Shepard) average f̄_i = (W(0) f_i + Σ_j W_ij f_j)/(W(0) + Σ_j W_ij) over the granular
     neighbours j of each granular particle i (wall particles left out)."""
+    start, nbr, wk = pairs.start, pairs.nbr, pairs.wk
     w0 = 7.0 / (4.0 * math.pi * h * h)
     out = np.empty(nf)
     for i in prange(nf):
@@ -61,13 +61,14 @@ def shepard_average(start, nbr, wk, nf, h, f):
 
 
 @prange_kernel
-def mls_linear_average(start, nbr, rx, ry, wk, nf, h, f):
+def mls_linear_average(pairs, nf, h, f):
     """Value at each granular particle of the kernel-weighted least-squares linear fit
     f ≈ a + b·(x_j − x_i) over the particle and its granular neighbours (moving least squares of
     order 1): exact for linear fields, also where the support is cut by the free surface or a wall,
     and a low-pass filter for the rest (a layer-to-layer alternation is averaged out). Where the
     3 × 3 moment matrix is singular to round-off (fewer than three neighbours in general position),
     the Shepard average. ``rx, ry``: x_i − x_j of each pair."""
+    start, nbr, rx, ry, wk = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.wk
     w0 = 7.0 / (4.0 * math.pi * h * h)
     out = np.empty(nf)
     for i in prange(nf):
@@ -109,9 +110,10 @@ def mls_linear_average(start, nbr, rx, ry, wk, nf, h, f):
 
 
 @prange_kernel
-def geometry_terms(start, rx, ry, rr, wk, gw, nf, h, vol):
+def geometry_terms(pairs, nf, h, vol):
     """∇·r (free-surface detector, Lee et al. 2008), concentration C = Σ V W (self included),
     ∇C (shifting, normals) and the inverse renormalisation matrix L (Bonet & Lok 1999)."""
+    start, rx, ry, rr, wk, gw = pairs.start, pairs.rx, pairs.ry, pairs.rr, pairs.wk, pairs.gw
     divr = np.zeros(nf)
     conc = np.zeros(nf)
     gcx = np.zeros(nf)
@@ -178,9 +180,11 @@ def lmat_pressure(lmat, fs, mxx, myy):
 
 
 @prange_kernel
-def velocity_gradient(start, nbr, rx, ry, gw, nf, vol, x, y, u, v, lmat, wnx, wny, wc, slip, slip_length, dx):
+def velocity_gradient(pairs, nf, vol, x, y, u, v, lmat, walls, slip, slip_length, dx):
     """Renormalised ∇u (rows: du/dx, du/dy, dv/dx, dv/dy); wall neighbours carry the extrapolated
     wall velocity (normal component = u_i's, tangential (1 − βφ) u_i,t)."""
+    start, nbr, rx, ry, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.gw
+    wnx, wny, wc = walls.nx, walls.ny, walls.c
     grad = np.zeros((nf, 4))
     for i in prange(nf):
         a0 = 0.0
@@ -199,7 +203,7 @@ def velocity_gradient(start, nbr, rx, ry, gw, nf, vol, x, y, u, v, lmat, wnx, wn
                 ny = wny[w]
                 # linear extrapolation to the wall particle, not capped at Morris's β = 1.5: the
                 # renormalised gradient is then exact for a linear profile through the wall value
-                # (with the cap, the bed shear rate of the Bagnold test read 44 1/s instead of 84)
+                # (docs/paper-notes.md, "Kernel design notes")
                 beta = wall_beta_linear(x[i], y[i], nx, ny, wc[w], x[j], y[j], slip, slip_length, dx)
                 if slip == SLIP_COULOMB:
                     beta = 0.0  # the granular particle slides on the wall; friction is a contact force
@@ -236,13 +240,12 @@ def shear_rate(grad, i):
 
 
 @prange_kernel
-def divergence(start, nbr, rx, ry, gw, nf, vol, u, v, lmat):
+def divergence(pairs, nf, vol, u, v, lmat):
     """∇·u_i = tr(L_i Σ_j V (u_j − u_i) ⊗ ∇_i W_ij) over granular neighbours (walls enter through
     the pressure Neumann condition, not here). With the renormalisation L (identity where the
     support is too sparse) the divergence of any linear velocity field is exact, also with a
-    one-sided support: without it a sheared top layer showed ∇·u ~ γ̇ (≈ 40 1/s) on particles that
-    the ∇·r test had just flagged interior, and the projection answered with pressure spikes of
-    10³–10⁴ Pa that launched particles (Bagnold test, θ = 30°)."""
+    one-sided support (why it matters: docs/paper-notes.md, "Kernel design notes")."""
+    start, nbr, rx, ry, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.gw
     div = np.zeros(nf)
     for i in prange(nf):
         axx = 0.0
@@ -265,12 +268,14 @@ def divergence(start, nbr, rx, ry, gw, nf, vol, u, v, lmat):
 
 
 @prange_kernel
-def pressure_gradient(start, nbr, rx, ry, gw, nf, vol, p, us, vs, lmat, wnx, wny, dt, rho, detached):
+def pressure_gradient(pairs, nf, vol, p, us, vs, lmat, walls, dt, rho, detached):
     """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure.
 
     ``detached`` particles (first layer over a wall but farther than 0.75 dx from it) ignore the
     wall: with the renormalisation the mirror pressure would otherwise hold them at any height
     within the kernel support (2h), hovering without contact."""
+    start, nbr, rx, ry, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.gw
+    wnx, wny = walls.nx, walls.ny
     gpx = np.zeros(nf)
     gpy = np.zeros(nf)
     for i in prange(nf):
@@ -297,12 +302,11 @@ def pressure_gradient(start, nbr, rx, ry, gw, nf, vol, p, us, vs, lmat, wnx, wny
 
 
 @prange_kernel
-def smoothed_gradient(start, nbr, wk, nf, h, gx, gy):
+def smoothed_gradient(pairs, nf, h, gx, gy):
     """Kernel (Shepard) average of a granular particle field's gradient over each support: the
-    surface normal of the shifting. The raw ∇C of a free-surface particle points at the nearest
-    clump of surface particles (no pressure acts between them), so projecting the shift onto the
-    tangent of that "normal" removed exactly the de-clumping part of the shift; clumps of 2–3
-    surface particles within 0.1 dx formed in the Bagnold test and ended in pressure spikes."""
+    surface normal of the shifting (rather than the raw ∇C, which points at the nearest clump of
+    surface particles: docs/paper-notes.md, "Kernel design notes")."""
+    start, nbr, wk = pairs.start, pairs.nbr, pairs.wk
     sx = np.zeros(nf)
     sy = np.zeros(nf)
     w0 = wendland_w(0.0, h)

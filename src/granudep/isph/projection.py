@@ -23,13 +23,16 @@ instead of +20 %) and is not the default (docs/paper-notes.md, "Energy budget").
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import get_num_threads, njit, prange
+
+from .parallel import prange_kernel
 
 
 @njit(cache=True)
-def adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, u, v, lmat):
+def adjoint_divergence(pairs, nf, vol, u, v, lmat):
     """D u_k = −(Gᵀ u)_k for the renormalised pressure gradient with matrices ``lmat`` (rows
     L0 L1 / L2 L3, the ones the corrector uses); granular neighbours only."""
+    start, nbr, rx, ry, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.gw
     div = np.zeros(nf)
     for k in range(nf):
         s = 0.0
@@ -90,10 +93,12 @@ def adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, u, v, lmat):
 
 
 @njit(cache=True)
-def divergence_entries(start, nbr, rx, ry, gw, nf, vol, lmat, wnx, wny):
+def divergence_entries(pairs, nf, vol, lmat, walls):
     """COO entries (row node, column particle, x and y coefficients) of D above, with the wall
     terms restricted to the wall-normal velocity (n: the wall particle's surface normal): a wall
     constrains penetration only, never the tangential stretching of the flow along it."""
+    start, nbr, rx, ry, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.gw
+    wnx, wny = walls.nx, walls.ny
     nnz = 0
     for k in range(nf):
         nnz += 1 + start[k + 1] - start[k]
@@ -147,10 +152,11 @@ def divergence_entries(start, nbr, rx, ry, gw, nf, vol, lmat, wnx, wny):
 
 
 @njit(cache=True)
-def compact_laplacian_edges(start, nbr, rr, gw, nf, vol, eps2, lap_norm):
+def compact_laplacian_edges(pairs, nf, vol, eps2, lap_norm):
     """Edges (i, j, a_ij) of the compact Laplacian L_c = Σ_e a_e (e_i − e_j)(e_i − e_j)ᵀ over the
     granular pairs (each once) and the granular–wall pairs; a_ij = 2 V F_ij r²/(r² + ε²)/lap_norm
     (the PPE's Cummins & Rudman weights)."""
+    start, nbr, rr, gw = pairs.start, pairs.nbr, pairs.rr, pairs.gw
     n = 0
     for i in range(nf):
         for q in range(start[i], start[i + 1]):
@@ -173,9 +179,8 @@ def compact_laplacian_edges(start, nbr, rr, gw, nf, vol, eps2, lap_norm):
     return ei, ej, ea
 
 
-def adjoint_pair_projection(start, nbr, rx, ry, rr, gw, nf, nw, vol, lmat, wnx, wny, fs, p_fs, us, vs, conc, c0,
-                            relax, dt, rho, eps2, lap_norm, stab, guess, solve, wall_dry, max_passes=1, release=True,
-                            entries=None):
+def adjoint_pair_projection(pairs, nf, nw, vol, lmat, walls, fs, p_fs, us, vs, conc, c0, relax, dt, rho, eps2,
+                            lap_norm, stab, guess, solve, wall_dry, max_passes=1, release=True, entries=None):
     """Solve ((1 − ε) D Dᵀ + ε L_c) p = −(ρ/Δt) D u* + s on the interior granular and the wetted wall nodes
     (free-surface particles: p = ``p_fs``; dry or pulling walls: p = 0) and return the node
     pressures (nf + nw), the corrector's G p = −Dᵀ p (x and y), the wall nodes to keep dry at the
@@ -189,9 +194,8 @@ def adjoint_pair_projection(start, nbr, rx, ry, rr, gw, nf, nw, vol, lmat, wnx, 
     one step: the energy identity holds for the system actually solved). ``entries``: D in COO
     (:func:`divergence_entries` of these arguments) when the caller has it already."""
     n = nf + nw
-    rows, cols, cx, cy = (entries if entries is not None
-                          else divergence_entries(start, nbr, rx, ry, gw, nf, vol, lmat, wnx, wny))
-    ei, ej, ea = compact_laplacian_edges(start, nbr, rr, gw, nf, vol, eps2, lap_norm)
+    rows, cols, cx, cy = (entries if entries is not None else divergence_entries(pairs, nf, vol, lmat, walls))
+    ei, ej, ea = compact_laplacian_edges(pairs, nf, vol, eps2, lap_norm)
     b = -(rho / dt) * apply_divergence(n, rows, cols, cx, cy, us, vs)
     b[:nf] -= relax * rho / (dt * dt) * np.minimum(1.0 - conc / c0, 0.0)
     wetted = np.zeros(nw, dtype=np.bool_)
@@ -249,29 +253,23 @@ def coo_to_csr(rows, n):
 
 
 @njit(cache=True)
-def assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
-    """CSR (diagonal first) of ((1 − ε) D Dᵀ + ε L_c) restricted to the unknown nodes and its right-hand side
-    b_U − A_UK p_K (Gustavson's row-by-row product with a dense accumulator).
-
-    ``rows, cols, cx, cy``: D in COO (:func:`divergence_entries`); ``ei, ej, ea``: the edges of L_c;
-    ``unknown[node]``: the unknown's index or −1 (known, value ``p[node]``), the unknowns numbered in
-    node order."""
-    # D by node (rows) and by particle (columns), gathered into contiguous arrays
+def _gather_products(n, rows, cols, cx, cy, nf, ei, ej, ea):
+    """D by node (rows) and by particle (columns), and L_c by node (both directions of each edge),
+    as contiguous CSR-like arrays (column indices int32) for :func:`assemble_adjoint_ppe`."""
     rptr, rperm = coo_to_csr(rows, n)
     cptr, cperm = coo_to_csr(cols, nf)
-    r_col = cols[rperm]
+    r_col = cols[rperm].astype(np.int32)
     r_x = cx[rperm]
     r_y = cy[rperm]
-    c_row = rows[cperm]
+    c_row = rows[cperm].astype(np.int32)
     c_x = cx[cperm]
     c_y = cy[cperm]
-    # L_c by node: both directions of each edge
     ne = ei.size
     lrows = np.empty(2 * ne, np.int64)
     lrows[:ne] = ei
     lrows[ne:] = ej
     lptr, lperm = coo_to_csr(lrows, n)
-    l_col = np.empty(2 * ne, np.int64)
+    l_col = np.empty(2 * ne, np.int32)
     l_val = np.empty(2 * ne)
     for q in range(2 * ne):
         e = lperm[q]
@@ -281,62 +279,72 @@ def assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n
         else:
             l_col[q] = ei[e - ne]
             l_val[q] = ea[e - ne]
-    wd = 1.0 - stab
-    acc = np.zeros(n)
-    mark = np.full(n, -1, np.int64)
-    lst = np.empty(n, np.int64)
-    # one pass into an upper bound of the pattern, compacted below
-    bound = 0
-    for a in range(n):
+    return rptr, r_col, r_x, r_y, cptr, c_row, c_x, c_y, lptr, l_col, l_val
+
+
+@njit(cache=True)
+def _row_bounds(a0, a1, rptr, r_col, cptr, lptr, unknown):
+    """Upper bounds of the entries of the unknown rows among nodes a0..a1−1: their total and the
+    largest of one row."""
+    total = 0
+    largest = 0
+    for a in range(a0, a1):
         if unknown[a] < 0:
             continue
-        bound += 1 + lptr[a + 1] - lptr[a]
+        m = 1 + lptr[a + 1] - lptr[a]
         for q in range(rptr[a], rptr[a + 1]):
             i = r_col[q]
-            bound += cptr[i + 1] - cptr[i]
-    rowlen = np.zeros(n_unknown, np.int64)
-    indices = np.empty(bound, np.int64)
-    data = np.empty(bound)
-    rhs = np.zeros(n_unknown)
+            m += cptr[i + 1] - cptr[i]
+        total += m
+        largest = max(largest, m)
+    return total, largest
+
+
+@njit(cache=True)
+def _product_rows(a0, a1, g, wd, stab, unknown, p, b, slot, acc, lst, indices, data, rowlen, rhs):
+    """Gustavson's row-by-row product for the unknown rows among nodes a0..a1−1, written from 0 into
+    ``indices``/``data`` (diagonal first, then the columns in the order they are met); ``slot``
+    (−1 on entry and on return) maps a node to its place in the row's accumulator ``acc``.
+    Returns the number of entries written."""
+    rptr, r_col, r_x, r_y, cptr, c_row, c_x, c_y, lptr, l_col, l_val = g
     pos = 0
-    expect = 0
-    for a in range(n):
+    for a in range(a0, a1):
         ra = unknown[a]
         if ra < 0:
             continue
-        if ra != expect:
-            raise ValueError("assemble_adjoint_ppe: unknowns must be numbered in node order")
-        expect += 1
-        m = 0
-        mark[a] = a
-        lst[m] = a
-        m += 1
-        acc[a] = 0.0
+        m = 1
+        slot[a] = 0
+        lst[0] = a
+        acc[0] = 0.0
         for q in range(rptr[a], rptr[a + 1]):
             i = r_col[q]
             ax = r_x[q]
             ay = r_y[q]
             for t in range(cptr[i], cptr[i + 1]):
                 bn = c_row[t]
-                if mark[bn] != a:
-                    mark[bn] = a
+                s = slot[bn]
+                if s < 0:
+                    s = m
+                    slot[bn] = m
                     lst[m] = bn
+                    acc[m] = 0.0
                     m += 1
-                    acc[bn] = 0.0
-                acc[bn] += wd * (ax * c_x[t] + ay * c_y[t])
+                acc[s] += wd * (ax * c_x[t] + ay * c_y[t])
         for q in range(lptr[a], lptr[a + 1]):
             bn = l_col[q]
             w = stab * l_val[q]
-            if mark[bn] != a:
-                mark[bn] = a
+            s = slot[bn]
+            if s < 0:
+                s = m
+                slot[bn] = m
                 lst[m] = bn
+                acc[m] = 0.0
                 m += 1
-                acc[bn] = 0.0
-            acc[bn] -= w
-            acc[a] += w
+            acc[s] -= w
+            acc[0] += w
         start_pos = pos
         indices[pos] = ra
-        data[pos] = acc[a]
+        data[pos] = acc[0]
         pos += 1
         ba = b[a]
         for t in range(1, m):
@@ -344,18 +352,74 @@ def assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n
             rb = unknown[bn]
             if rb >= 0:
                 indices[pos] = rb
-                data[pos] = acc[bn]
+                data[pos] = acc[t]
                 pos += 1
             else:
-                ba -= acc[bn] * p[bn]
+                ba -= acc[t] * p[bn]
         rhs[ra] = ba
         rowlen[ra] = pos - start_pos
+        for t in range(m):
+            slot[lst[t]] = -1
+    return pos
+
+
+def assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+    """CSR (diagonal first) of ((1 − ε) D Dᵀ + ε L_c) restricted to the unknown nodes and its right-hand side
+    b_U − A_UK p_K (Gustavson's row-by-row product, :func:`_product_rows`).
+
+    ``rows, cols, cx, cy``: D in COO (:func:`divergence_entries`); ``ei, ej, ea``: the edges of L_c;
+    ``unknown[node]``: the unknown's index or −1 (known, value ``p[node]``), the unknowns numbered in
+    node order. The nodes are split into one contiguous block per numba thread (``prange``); each row
+    is computed alone, in the same order whatever the blocks, so the result does not depend on the
+    thread count (bit for bit)."""
+    return _assemble_blocks(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b,
+                            max(1, min(get_num_threads(), n)))
+
+
+@prange_kernel
+def _assemble_blocks(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b, nblock):
+    """:func:`assemble_adjoint_ppe` over ``nblock`` contiguous blocks of nodes, one per ``prange`` iteration."""
+    expect = 0
+    for a in range(n):
+        if unknown[a] >= 0:
+            if unknown[a] != expect:
+                raise ValueError("assemble_adjoint_ppe: unknowns must be numbered in node order")
+            expect += 1
+    g = _gather_products(n, rows, cols, cx, cy, nf, ei, ej, ea)
+    rptr, r_col, cptr, lptr = g[0], g[1], g[4], g[8]
+    wd = 1.0 - stab
+    rowlen = np.zeros(n_unknown, np.int64)
+    rhs = np.zeros(n_unknown)
+    edges = np.empty(nblock + 1, np.int64)
+    for c in range(nblock + 1):
+        edges[c] = (n * c) // nblock
+    counts = np.zeros(nblock, np.int64)
+    block_indices = [np.empty(0, np.int32) for _ in range(nblock)]
+    block_data = [np.empty(0) for _ in range(nblock)]
+    for c in prange(nblock):
+        total, largest = _row_bounds(edges[c], edges[c + 1], rptr, r_col, cptr, lptr, unknown)
+        ind = np.empty(total, np.int32)
+        dat = np.empty(total)
+        slot = np.full(n, -1, np.int32)
+        acc = np.empty(largest)
+        lst = np.empty(largest, np.int32)
+        counts[c] = _product_rows(edges[c], edges[c + 1], g, wd, stab, unknown, p, b, slot, acc, lst, ind, dat,
+                                  rowlen, rhs)
+        block_indices[c] = ind
+        block_data[c] = dat
     indptr = np.zeros(n_unknown + 1, np.int64)
     for r in range(n_unknown):
         indptr[r + 1] = indptr[r] + rowlen[r]
-    # the rows were written in node order, which is the unknown order (unknown[] increases with
-    # the node index), so the compacted arrays are the first indptr[-1] entries
-    return indptr, indices[:indptr[n_unknown]].copy(), data[:indptr[n_unknown]].copy(), rhs
+    # the blocks hold consecutive rows in node order, which is the unknown order
+    indices = np.empty(indptr[n_unknown], np.int64)
+    data = np.empty(indptr[n_unknown])
+    off = 0
+    for c in range(nblock):
+        e = counts[c]
+        indices[off:off + e] = block_indices[c][:e]
+        data[off:off + e] = block_data[c][:e]
+        off += e
+    return indptr, indices, data, rhs
 
 
 @njit(cache=True)
@@ -381,7 +445,7 @@ def apply_gradient(nf, rows, cols, cx, cy, p):
 
 
 @njit(cache=True)
-def wall_normal_acceleration(start, nbr, rx, ry, gw, nf, vol, lmat, wnx, wny, p, rho, planes):
+def wall_normal_acceleration(pairs, nf, vol, lmat, walls, p, rho, planes):
     """Acceleration of each granular particle along each wall plane's normal that the walls' pressure
     terms of G p = −Dᵀ p apply (the wall reaction of the adjoint-pair projection):
 
@@ -390,6 +454,8 @@ def wall_normal_acceleration(start, nbr, rx, ry, gw, nf, vol, lmat, wnx, wny, p,
     (``p``: node pressures, granular then wall). Summed over the particles it is the wall's normal
     reaction, whatever the resolution; the Coulomb friction of ``wall.coulomb_normal: projection``
     is μ_B times it."""
+    start, nbr, rx, ry, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.gw
+    wnx, wny = walls.nx, walls.ny
     npl = planes.shape[0]
     out = np.zeros((nf, npl))
     for i in range(nf):

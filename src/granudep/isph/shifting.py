@@ -15,15 +15,14 @@ from .parallel import prange_kernel
 
 
 @prange_kernel
-def surface_band(start, nbr, wk, nf, fs, h, r_ref):
+def surface_band(pairs, nf, fs, h, r_ref):
     """Weight α ∈ [0, 1] of the bed-normal part of the shift that is removed (Lind et al. 2012):
-    1 on free-surface particles, Σ_{j free-surface} W_ij / W(r_ref) (at most 1) below them. Below the
-    surface the truncated support gives ∇C a normal part that pushed the second layer up into the
-    surface layer at every step (Bagnold layer: top layer 0.25 dx low, pressure ≈ ρ g cosθ 0.15 dx low
-    throughout). With r_ref = 2 dx the second and third layers of a lattice get α = 1 and the weight
+    1 on free-surface particles, Σ_{j free-surface} W_ij / W(r_ref) (at most 1) below them, where the
+    truncated support gives ∇C a normal part (docs/paper-notes.md, "Kernel design notes"). With r_ref = 2 dx the second and third layers of a lattice get α = 1 and the weight
     goes to 0 with W at the edge of the support (2.6 dx), so it is continuous in the positions (a
     0/1 band switched by a neighbour crossing the support radius turns round-off into different
     runs)."""
+    start, nbr, wk = pairs.start, pairs.nbr, pairs.wk
     alpha = np.zeros(nf)
     w_ref = wendland_w(r_ref, h)
     for i in prange(nf):

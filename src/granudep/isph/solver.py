@@ -43,7 +43,7 @@ from .projection import (adjoint_divergence, adjoint_pair_projection, apply_grad
                          wall_normal_acceleration)
 from .linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pcg_two_level,
                        pin_blas_to_one_thread)
-from .neighbours import build_neighbours
+from .bundles import Pairs, WallSurface, pairs_of
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
                     reference_laplacian_sum)
 
@@ -56,21 +56,9 @@ class IsphBlowUp(RuntimeError):
         self.dataset = dataset
 
 
-class Neighbours(NamedTuple):
-    """The step's neighbour list (:func:`neighbours.build_neighbours`): CSR rows of the granular
-    particles, neighbour indices, pair vectors r_ij = x_i − x_j and distances."""
-    start: np.ndarray
-    nbr: np.ndarray
-    rx: np.ndarray
-    ry: np.ndarray
-    rr: np.ndarray
-
-
 class Geometry(NamedTuple):
-    """Per-step geometry shared by the stages: kernel values W and (dW/dr)/r per pair, concentration,
-    ∇C, renormalisation matrices and their diagonal, wall contact (planes, columns), detachment."""
-    wk: np.ndarray
-    gw: np.ndarray
+    """Per-step geometry shared by the stages: concentration, ∇C, renormalisation matrices and their
+    diagonal, wall contact (planes, columns), detachment."""
     conc: np.ndarray
     gcx: np.ndarray
     gcy: np.ndarray
@@ -226,6 +214,12 @@ class IsphSolver:
 
     # ------------------------------------------------------------------------------------------
     @property
+    def wall_surface(self) -> WallSurface:
+        """The wall particles' surface normals and offsets (the bundle the kernels take)."""
+        P = self.parts
+        return WallSurface(P.wnx, P.wny, P.wc)
+
+    @property
     def reaction_friction(self) -> bool:
         """Coulomb friction from the walls' normal reaction (wall.coulomb_normal: projection, or auto
         with the adjoint-pair projection, whose walls carry pressure); read from the config, so a
@@ -293,45 +287,42 @@ class IsphSolver:
         self._check()
         self._check_energy()
 
-    def _neighbours(self) -> Neighbours:
+    def _neighbours(self) -> Pairs:
         """Stage 1a: the particle renumbering (every ``reorder_interval`` steps) and the neighbour list."""
         if self.reorder_interval and self.step_no % self.reorder_interval == 0:
             self._reorder()
-        return Neighbours(*build_neighbours(self.x, self.y, self.nf, self.radius, self.period))
+        return pairs_of(self.x, self.y, self.nf, self.radius, self.period, self.h)
 
-    def _geometry(self, nb: Neighbours) -> Geometry:
+    def _geometry(self, nb: Pairs) -> Geometry:
         """Stage 1b: kernel values, ∇·r, concentration, renormalisation, free surface, wall contact."""
         c = self.cfg
         nf, h = self.nf, self.h
-        wk, gw = operators.pair_kernel(nb.rr, h)
-        divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(nb.start, nb.rx, nb.ry, nb.rr, wk, gw, nf, h,
+        divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(nb, nf, h,
                                                                      self.vol)
         self.fs = divr < c.numerics.free_surface_threshold
-        contact, col = walls.wall_contact(nb.start, nb.nbr, nf, self.x, self.y, self.planes, self.dx, h,
+        contact, col = walls.wall_contact(nb, nf, self.x, self.y, self.planes, self.dx, h,
                                           c.wall.cover_offset * self.dx)
         detached = walls.detached_from_walls(contact, 0.75 * self.dx)
-        return Geometry(wk, gw, conc, gcx, gcy, lmat, mdiag, contact, col, detached)
+        return Geometry(conc, gcx, gcy, lmat, mdiag, contact, col, detached)
 
-    def _rheology(self, nb: Neighbours, geo: Geometry) -> None:
+    def _rheology(self, nb: Pairs, geo: Geometry) -> None:
         """Stage 2: the pressure the friction law sees (eq 5), η and |γ̇| from uⁿ, pⁿ."""
         c = self.cfg
         nf, h = self.nf, self.h
-        start, nbr, rx, ry, rr = nb
         rh = c.rheology
         # pressure seen by the friction law (eq 5): clipped below at the overburden of half a
         # particle layer, ρ g cosθ dx/2 (free-surface and thin-front particles keep friction)
         if rh.pressure_filter == "mls":
-            p_seen = operators.mls_linear_average(start, nbr, rx, ry, geo.wk, nf, h, self.p)
+            p_seen = operators.mls_linear_average(nb, nf, h, self.p)
         elif rh.pressure_filter == "shepard":
-            p_seen = operators.shepard_average(start, nbr, geo.wk, nf, h, self.p)
+            p_seen = operators.shepard_average(nb, nf, h, self.p)
         else:
             p_seen = self.p
         self.p_rheo = np.maximum(p_seen, self.p_floor)
         if rh.model != "mu_i":
             return
-        P = self.parts
-        grad = operators.velocity_gradient(start, nbr, rx, ry, geo.gw, nf, self.vol, self.x, self.y, self.u, self.v,
-                                           geo.lmat, P.wnx, P.wny, P.wc, self.slip, c.wall.slip_length, self.dx)
+        grad = operators.velocity_gradient(nb, nf, self.vol, self.x, self.y, self.u, self.v, geo.lmat, self.wall_surface,
+                                           self.slip, c.wall.slip_length, self.dx)
         m = c.material
         if rh.regularisation == "none" and rh.mu_inf == 0.0:
             self.eta, self.gdot = viscous.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
@@ -347,13 +338,12 @@ class IsphSolver:
         return n.pressure_correction == "incremental" or (n.pressure_correction == "auto"
                                                           and n.projection == "adjoint_pair")
 
-    def _divergence_matrix(self, nb: Neighbours, geo: Geometry, lmat_p):
+    def _divergence_matrix(self, nb: Pairs, geo: Geometry, lmat_p):
         """Stage 2b (adjoint pair): the divergence D in COO (:func:`projection.divergence_entries`),
         shared by the old pressure gradient and the projection; None with the approximate projection."""
         if self.cfg.numerics.projection != "adjoint_pair":
             return None
-        return divergence_entries(nb.start, nb.nbr, nb.rx, nb.ry, geo.gw, self.nf, self.vol, lmat_p,
-                                  self.parts.wnx, self.parts.wny)
+        return divergence_entries(nb, self.nf, self.vol, lmat_p, self.wall_surface)
 
     def _old_pressure_gradient(self, dmat):
         """G pⁿ = −Dᵀ pⁿ on the current geometry with the previous step's granular and wall pressures
@@ -363,16 +353,14 @@ class IsphSolver:
             return None
         return apply_gradient(self.nf, *dmat, np.concatenate((self.p, self.p_wall)))
 
-    def _predictor(self, nb: Neighbours, geo: Geometry, dt: float, gp_old=None):
+    def _predictor(self, nb: Pairs, geo: Geometry, dt: float, gp_old=None):
         """Stage 3: the predictor u*, implicit in the viscous stress, with the Coulomb wall drag in its
         diagonal and (``gp_old``, incremental) the old pressure impulse −Δt/ρ G pⁿ on its right-hand
         side; books the viscous and wall-friction dissipation. Returns (u*, v*)."""
         c = self.cfg
         nf, rho = self.nf, self.rho
-        start, nbr, rx, ry, rr = nb
-        P = self.parts
-        indptr, indices, data, diag_v = viscous.assemble_viscous(start, nbr, rr, geo.gw, nf, self.vol, self.x, self.y,
-                                                                 self.eta, self.gdot, P.wnx, P.wny, P.wc, self.slip,
+        indptr, indices, data, diag_v = viscous.assemble_viscous(nb, nf, self.vol, self.x, self.y,
+                                                                 self.eta, self.gdot, self.wall_surface, self.slip,
                                                                  c.wall.slip_length, self.dx, dt, rho, self.eps2,
                                                                  self.mean, self.lap_norm, self.wall_ns)
         wall_du = wall_dv = None
@@ -386,7 +374,7 @@ class IsphSolver:
                                                  self.u_eps, diag_u, diag_v)
             else:
                 if c.wall.contact_length == "voronoi":
-                    clen = walls.contact_length(start, nbr, nf, self.x, self.y, geo.contact, self.planes, self.dx)
+                    clen = walls.contact_length(nb, nf, self.x, self.y, geo.contact, self.planes, self.dx)
                 else:
                     clen = np.full(geo.contact.shape, self.dx)
                 walls.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, geo.contact, geo.col, self.planes,
@@ -430,23 +418,21 @@ class IsphSolver:
             eb.wall_friction += self.m * float(np.dot(wall_du, us * us) + np.dot(wall_dv, vs * vs))
         return us, vs
 
-    def _projection(self, nb: Neighbours, geo: Geometry, lmat_p, dmat, us, vs, dt: float) -> None:
+    def _projection(self, nb: Pairs, geo: Geometry, lmat_p, dmat, us, vs, dt: float) -> None:
         """Stage 4: the pressure projection of u* (adjoint pair or approximate): pⁿ⁺¹ and uⁿ⁺¹."""
-        start, nbr, rx, ry, rr = nb
         if self.cfg.numerics.projection == "adjoint_pair":
-            self._project_adjoint_pair(start, nbr, rx, ry, rr, geo.gw, lmat_p, dmat, geo.conc, us, vs, dt)
+            self._project_adjoint_pair(nb, lmat_p, dmat, geo.conc, us, vs, dt)
         else:
-            self._project_approximate(start, nbr, rx, ry, rr, geo.gw, geo.lmat, lmat_p, geo.conc, us, vs, dt,
+            self._project_approximate(nb, geo.lmat, lmat_p, geo.conc, us, vs, dt,
                                       geo.detached)
 
-    def _shift_and_move(self, nb: Neighbours, geo: Geometry, u_old, v_old, us, vs, dt: float) -> None:
+    def _shift_and_move(self, nb: Pairs, geo: Geometry, u_old, v_old, us, vs, dt: float) -> None:
         """Stage 5: particle shifting, the new positions, the wall clamps and their energy terms."""
         c = self.cfg
         nf, h = self.nf, self.h
-        start, nbr = nb.start, nb.nbr
         eb = self.energy
-        ncx, ncy = operators.smoothed_gradient(start, nbr, geo.wk, nf, h, geo.gcx, geo.gcy)
-        alpha = (shifting.surface_band(start, nbr, geo.wk, nf, self.fs, h, 2.0 * self.dx)
+        ncx, ncy = operators.smoothed_gradient(nb, nf, h, geo.gcx, geo.gcy)
+        alpha = (shifting.surface_band(nb, nf, self.fs, h, 2.0 * self.dx)
                  if c.numerics.shifting_surface == "band" else self.fs.astype(np.float64))
         sx, sy = shifting.shifting(nf, geo.gcx, geo.gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
                                    ncx, ncy)
@@ -470,15 +456,15 @@ class IsphSolver:
         self.t += dt
         self.step_no += 1
 
-    def _project_approximate(self, start, nbr, rx, ry, rr, gw, lmat, lmat_p, conc, us, vs, dt, detached):
+    def _project_approximate(self, nb: Pairs, lmat, lmat_p, conc, us, vs, dt, detached):
         """Approximate projection: compact-Laplacian PPE with mirror-pressure (Neumann) walls, the
         renormalised difference gradient in the corrector."""
         c = self.cfg
-        nf, vol, rho, P = self.nf, self.vol, self.rho, self.parts
+        nf, vol, rho = self.nf, self.vol, self.rho
         if c.numerics.ppe_divergence == "adjoint":
-            div = adjoint_divergence(start, nbr, rx, ry, gw, nf, vol, us, vs, lmat_p)
+            div = adjoint_divergence(nb, nf, vol, us, vs, lmat_p)
         else:
-            div = operators.divergence(start, nbr, rx, ry, gw, nf, vol, us, vs, lmat)
+            div = operators.divergence(nb, nf, vol, us, vs, lmat)
         unknown = np.full(nf, -1, np.int64)
         interior = ~self.fs
         n_unknown = int(interior.sum())
@@ -487,17 +473,17 @@ class IsphSolver:
         # of a free-surface particle: p_fs = ρ g cosθ dx/2 (bed-normal hydrostatics), or 0
         p_new = np.where(self.fs, self.p_fs, 0.0)
         if n_unknown:
-            pi, pj, pd, rhs = ppe.assemble_ppe(start, nbr, rx, ry, rr, gw, nf, vol, unknown, n_unknown, p_new, div,
-                                               us, vs, conc, self.c0, self.density_relaxation(dt), P.wnx, P.wny, dt,
+            pi, pj, pd, rhs = ppe.assemble_ppe(nb, nf, vol, unknown, n_unknown, p_new, div,
+                                               us, vs, conc, self.c0, self.density_relaxation(dt), self.wall_surface, dt,
                                                rho, self.eps2, self.a_full, self.lap_norm)
             p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
         self.p = p_new
-        gpx, gpy = operators.pressure_gradient(start, nbr, rx, ry, gw, nf, vol, self.p, us, vs, lmat_p, P.wnx, P.wny,
+        gpx, gpy = operators.pressure_gradient(nb, nf, vol, self.p, us, vs, lmat_p, self.wall_surface,
                                                dt, rho, detached)
         self.u = us - dt / rho * gpx
         self.v = vs - dt / rho * gpy
 
-    def _project_adjoint_pair(self, start, nbr, rx, ry, rr, gw, lmat_p, dmat, conc, us, vs, dt):
+    def _project_adjoint_pair(self, nb: Pairs, lmat_p, dmat, conc, us, vs, dt):
         """Adjoint-pair projection (:func:`projection.adjoint_pair_projection`): G = −Dᵀ, walls carry
         pressure; the pressure cannot raise the kinetic energy except through the free-surface
         Dirichlet value and the density source (docs/paper-notes.md, session 6)."""
@@ -510,7 +496,7 @@ class IsphSolver:
         if self.wall_dry is None or self.wall_dry.size != nw:
             self.wall_dry = np.zeros(nw, dtype=bool)
         p, gpx, gpy, self.wall_dry, released = adjoint_pair_projection(
-            start, nbr, rx, ry, rr, gw, nf, nw, self.vol, lmat_p, self.parts.wnx, self.parts.wny, self.fs, self.p_fs, us, vs, conc, self.c0,
+            nb, nf, nw, self.vol, lmat_p, self.wall_surface, self.fs, self.p_fs, us, vs, conc, self.c0,
             self.density_relaxation(dt), dt, self.rho, self.eps2, self.lap_norm,
             c.numerics.projection_stabilisation, guess, self._solve_ppe, self.wall_dry,
             release=c.numerics.wall_release, entries=dmat)
@@ -518,8 +504,7 @@ class IsphSolver:
         self.p = p[:nf]
         self.p_wall = p[nf:]
         if self.reaction_friction:
-            self.wall_an = wall_normal_acceleration(start, nbr, rx, ry, gw, nf, self.vol, lmat_p, self.parts.wnx,
-                                                    self.parts.wny, p, self.rho, self.planes)
+            self.wall_an = wall_normal_acceleration(nb, nf, self.vol, lmat_p, self.wall_surface, p, self.rho, self.planes)
         self.u = us - dt / self.rho * gpx
         self.v = vs - dt / self.rho * gpy
 

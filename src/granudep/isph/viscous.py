@@ -71,8 +71,8 @@ def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
 
 
 @prange_kernel
-def assemble_viscous(start, nbr, rr, gw, nf, vol, x, y, eta, gdot, wnx, wny, wc, slip, slip_length, dx, dt, rho, eps2,
-                     mean, lap_norm, wall_ns):
+def assemble_viscous(pairs, nf, vol, x, y, eta, gdot, walls, slip, slip_length, dx, dt, rho, eps2, mean, lap_norm,
+                     wall_ns):
     """Implicit viscous matrices A = I − Δt/ρ ∇·(η∇·) (Morris Laplacian, pair viscosity
     :func:`pair_viscosity`, ``rheology.pair_mean``: stress-weighted by default) as CSR.
 
@@ -82,6 +82,8 @@ def assemble_viscous(start, nbr, rr, gw, nf, vol, x, y, eta, gdot, wnx, wny, wc,
     wall_i = Δt/ρ Σ_w 2 η_i V F_iw β φ t_a², t = wall tangent, a = x (u matrix) or y (v matrix).
     Returns indptr, indices, data (diagonal first in each row, u matrix) and diag_v (v matrix).
     """
+    start, nbr, rr, gw = pairs.start, pairs.nbr, pairs.rr, pairs.gw
+    wnx, wny, wc = walls.nx, walls.ny, walls.c
     indptr = np.zeros(nf + 1, np.int64)
     for i in prange(nf):
         cnt = 1

@@ -49,7 +49,7 @@ def wall_beta(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
 
 
 @prange_kernel
-def wall_contact(start, nbr, nf, x, y, planes, dx, h, cover):
+def wall_contact(pairs, nf, x, y, planes, dx, h, cover):
     """Per particle and wall plane (n, c): distance d = n·x − c if the particle is the first layer
     over that wall (d < 2h and no granular particle between it and the wall, i.e. none with
     d_j < d − dx/2 within a tangential offset ``cover``), else +inf; and the height of the granular
@@ -58,6 +58,7 @@ def wall_contact(start, nbr, nf, x, y, planes, dx, h, cover):
     (default) the two rules agree: every particle's weight is either in the column of the contact
     particle below it or carried by its own contact (with ``cover`` = dx, particles offset by
     dx/2..dx from the one below were in neither, and thin flows lost up to half their friction)."""
+    start, nbr = pairs.start, pairs.nbr
     npl = planes.shape[0]
     dist = np.full((nf, npl), np.inf)
     col = np.zeros((nf, npl))
@@ -113,12 +114,12 @@ def detached_from_walls(contact, limit):
 
 
 @prange_kernel
-def contact_length(start, nbr, nf, x, y, contact, planes, dx):
+def contact_length(pairs, nf, x, y, contact, planes, dx):
     """Wall length carried by each contact particle (Voronoi cell along the wall): half the distance
     to the nearest contact particle of the same wall on either side (dx/2 on a side without one
     within the neighbour list), clipped to [dx/2, 2 dx] in total. On the initial lattice this is dx;
-    in a flow the first layer stretches along the bed (median spacing 1.12 dx in T22-A70 at 4 mm)
-    and a fixed dx per particle loses that fraction of the basal friction."""
+    in a flow the first layer stretches along the bed (docs/paper-notes.md, "Kernel design notes")."""
+    start, nbr = pairs.start, pairs.nbr
     npl = planes.shape[0]
     length = np.zeros((nf, npl))
     for i in prange(nf):
