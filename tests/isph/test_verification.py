@@ -103,3 +103,23 @@ def test_cli_refuses_unknown_checks_and_missing_parts(tmp_path, capsys, argv, me
     from granudep.cli import main
     assert main(["verify", "isph", *argv, "-o", str(tmp_path / "x.csv")]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_flat_collapse_config_is_the_table2_material_on_a_horizontal_bed():
+    from granudep.isph.config import load_config
+    cfg = load_config(v.flat_collapse_config("quartz_sand", 1.0, 0.004))
+    assert cfg.geometry.theta_deg == 0.0 and cfg.geometry.H0 == pytest.approx(0.1)
+    assert cfg.material.phi_internal_deg == 31.0 and cfg.wall.phi_basal_deg == 31.0
+    assert cfg.material.rho == 1430.0 and cfg.case == "flat-quartz-sand-a1"
+    with pytest.raises(ValueError, match="aspect"):
+        v.flat_collapse_config("glass_beads", 0.0)
+
+
+def test_coarse_flat_collapse_spreads_slumps_and_stops_without_gaining_energy():
+    from granudep.isph.api import run_isph
+    ds = run_isph(v.flat_collapse_config("glass_beads", 0.5, 0.008), progress=False)
+    l0 = float(ds.attrs["L0"])
+    assert ds.attrs["status"] == "at rest"
+    assert l0 < float(ds["final_front_v99"]) < 3 * l0          # it spreads, not to the domain end
+    assert float(ds["y"].isel(time=-1).max()) < 0.5 * l0         # the column slumps below H0
+    assert float(ds.attrs["energy_max_excess"]) <= 0.01

@@ -186,6 +186,22 @@ def collapse_t22a70(quick: bool = False) -> list[dict]:
     ]
 
 
+def flat_collapse_config(material: str = "glass_beads", aspect: float = 0.5, dx: float = 0.002, L0: float = 0.1,
+                         **numerics) -> dict:
+    """Granular column collapse on a horizontal bed (issue 11's flat cases): a column L0 long and
+    a·L0 high of a Table 2 material against the back wall, 0.6 m of bed, the Coulomb bed with the
+    material's own friction angle (φ_B = φ), default scheme otherwise; run to rest."""
+    from ..cases import check_case_name, material as table2_material
+    if not aspect > 0.0:
+        raise ValueError(f"aspect: must be > 0 (got {aspect})")
+    m = table2_material(material)
+    return {"case": check_case_name(f"flat-{material.replace('_', '-')}-a{aspect:g}".replace(".", "p")),
+            "geometry": {"theta_deg": 0.0, "L0": L0, "H0": aspect * L0, "domain_length": 0.6},
+            "material": {k: m[k] for k in ("d", "rho_s", "rho", "phi_internal_deg")},
+            "wall": {"phi_basal_deg": m["phi_internal_deg"]},
+            "numerics": {"dx": dx, **numerics}, "output": {"progress_every_s": 1e9}}
+
+
 def dam_break_config(dx: float, slip: str = "free_slip", t_end: float = 1.0, **numerics) -> dict:
     """The classic water dam break: a column 0.057 m long and 0.114 m high (Martin & Moyce 1952's
     a = 2.25 in, n² = 2) against the back wall, water (ρ = 1000 kg/m³, μ = 1e-3 Pa s), flat bed 1 m long."""
