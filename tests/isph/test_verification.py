@@ -1,4 +1,5 @@
 """Analytic checks of the 2D ISPH solver (the same functions `granudep verify isph` runs)."""
+import numpy as np
 import pytest
 
 from granudep.isph import verification as v
@@ -123,3 +124,9 @@ def test_coarse_flat_collapse_spreads_slumps_and_stops_without_gaining_energy():
     assert l0 < float(ds["final_front_v99"]) < 3 * l0          # it spreads, not to the domain end
     assert float(ds["y"].isel(time=-1).max()) < 0.5 * l0         # the column slumps below H0
     assert float(ds.attrs["energy_max_excess"]) <= 0.01
+    # rest: the first snapshot from which the max speed stays below rest_speed (0.1 m/s), not the
+    # 5 t_c fallback that a flow never reaching 10x the rest speed used to get
+    t, vmax, ts = ds["time"].values, ds["max_speed"].values, float(ds["time_to_rest"])
+    assert ts < 5.0 * float(ds.attrs["t_c"])
+    k = int(np.argmin(abs(t - ts)))
+    assert (vmax[k:] < 0.1).all() and vmax[k - 1] >= 0.1

@@ -912,7 +912,9 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
                 # rms speed of those behind the front (a gap of one empty dx cell in a thin deposit
                 # moves the front back, so the max is taken over all particles)
                 vmax = s.mass_speed(math.inf if out.rest_measure == "max" else snaps.front[-1], out.rest_measure)
-                if vmax > 10.0 * out.rest_speed or s.t > 5.0 * cfg.t_c:
+                # the flow has started once the mass moves faster than the rest speed (a slow
+                # flat collapse never reaches 10x it: that rule put every such rest at 5 t_c)
+                if vmax > out.rest_speed or s.t > 5.0 * cfg.t_c:
                     st.started = True
                 if st.started and vmax < out.rest_speed:
                     if st.rest_since is None:
