@@ -102,8 +102,9 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     """Steady uniform μ(I) flow down a periodic incline (no-slip bed): Bagnold profile
     u(y) = (2/3)(I_θ/d) sqrt(φ g cosθ) [h^{3/2} − (h−y)^{3/2}], I_θ = I0 (tanθ − μ_s)/(μ_2 − tanθ).
 
-    The layer starts from the analytic profile and runs 5 s; the error is the relative L2 error of
-    the particle velocities averaged over t = 4.5..5 s. The solver's own steady state takes seconds to
+    The layer starts from the analytic profile and runs 10 s; the error is the relative L2 error of
+    the particle velocities averaged over t = 7.5..10 s (sessions 3-10: 4.5..5 s, before the 1 mm
+    layer had settled, see BAGNOLD_T_END). The solver's own steady state takes seconds to
     settle (relaxation time u_s/(g cosθ μ'(I_θ) I_θ) ≈ 2 s): at t = 1 s, the window used before
     session 3, the 0.5 mm error was still 3.3 % on its way to 4.6 %, and the 1 mm one 3.7 % on its
     way down to 2.5 %. The test is severe: μ(I) is flat (d ln μ/d ln I ≈ 0.1 at I_θ), so a 1 % error in
@@ -116,7 +117,7 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     low and the pressure of the whole layer ≈ 1.1 Pa (0.15 dx of overburden) low, which raised
     μ(I) = τ/p and the shear rate (+4–12 %). See docs/paper-notes.md.
     Also reported (no tolerance): the same layer at the collapse resolutions dx = 4 and 2 mm, 5 and 10
-    particles over the depth. Measured (session 4): L2 30 % and 8 % (mean u / analytic 0.70 and 0.92;
+    particles over the depth, over t = 10..20 s (they never settle). Measured (session 4, at 4.5..5 s): L2 30 % and 8 % (mean u / analytic 0.70 and 0.92;
     sampling every step instead of every 0.05 s gave 22 % and 13 %: at 5–10 particles the layer is
     not steady), the shear rate 15–30 % low across the depth at 4 mm, with the pressure 1–8 % above
     hydrostatic (through the flat μ(I) that accounts for much of it): thin μ(I) flows are too stiff at
@@ -124,15 +125,27 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     (docs/paper-notes.md, "Runout vs resolution")."""
     rows = []
     for dx in ((0.001,) if quick else (0.001, 0.0005)):
-        rows.append(_bagnold_row(dx, theta_deg))
+        rows.append(_bagnold_row(dx, theta_deg, t_end=BAGNOLD_T_END, t_avg=BAGNOLD_T_AVG))
     for dx in (0.004, 0.002):
-        rows.append(_bagnold_row(dx, theta_deg, tolerance=math.inf))
+        rows.append(_bagnold_row(dx, theta_deg, tolerance=math.inf, t_end=BAGNOLD_T_END_COARSE,
+                                 t_avg=BAGNOLD_T_AVG_COARSE))
     return rows
 
 
-def _bagnold_row(dx: float, theta_deg: float, tolerance: float = 0.03) -> dict:
+#: Bagnold windows (session 11). The 1 mm layer settles in ~7 s (mean u / analytic 0.9893 at 4 s,
+#: 0.9798 at 7.5 s, 0.9792 from 10 to 20 s; L2 2.3 % at 5 s, 2.53 % steady): the checked rows
+#: average over 7.5..10 s. At 4 and 2 mm (5 and 10 particles over the depth) the layer never settles:
+#: its mean speed wanders between 0.97 and 1.12 of Bagnold's for 30 s, and the 0.5 s window at
+#: 4.5..5 s used until session 10 read 0.983 at 4 mm (session 9: 0.909), and 1.036 for the same run
+#: with outputs every 0.05 s from 0.5 s (the steps clipped to the output times change the
+#: trajectory); those rows average over 10..20 s and report the spread.
+BAGNOLD_T_END, BAGNOLD_T_AVG = 10.0, 2.5
+BAGNOLD_T_END_COARSE, BAGNOLD_T_AVG_COARSE = 20.0, 10.0
+
+
+def _bagnold_row(dx: float, theta_deg: float, tolerance: float = 0.03, t_end: float = BAGNOLD_T_END,
+                 t_avg: float = BAGNOLD_T_AVG) -> dict:
     h = 0.02
-    t_end, t_avg = 5.0, 0.5
     cfg = load_config(layer_config(theta_deg, h, dx, wall={"slip": "no_slip"}))
     m = cfg.material
     th = math.radians(theta_deg)
@@ -154,7 +167,8 @@ def _bagnold_row(dx: float, theta_deg: float, tolerance: float = 0.03) -> dict:
     what = "" if math.isfinite(tolerance) else " (reported: collapse resolution)"
     return _row("bagnold", f"relative L2 error of u(y), dx = {dx * 1e3:g} mm{what}", err, 0.0, err, tolerance,
                 f"theta={theta_deg} deg, I_theta={i_th:.3f}, h={h} m, dx={dx}, no-slip bed; mean over "
-                f"t = {t_end - t_avg:.2f}..{t_end} s; mean u / analytic = {np.mean(means):.3f}")
+                f"t = {t_end - t_avg:.2f}..{t_end} s (every 0.05 s); mean u / analytic = {np.mean(means):.3f} "
+                f"(range {min(means):.3f}..{max(means):.3f}); L2 range {min(errs):.3f}..{max(errs):.3f}")
 
 
 def collapse_t22a70(quick: bool = False) -> list[dict]:
