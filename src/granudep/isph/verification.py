@@ -109,7 +109,7 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     session 3, the 0.5 mm error was still 3.3 % on its way to 4.6 %, and the 1 mm one 3.7 % on its
     way down to 2.5 %. The test is severe: μ(I) is flat (d ln μ/d ln I ≈ 0.1 at I_θ), so a 1 % error in
     the shear stress or the pressure moves the shear rate by ~10 %.
-    Target L2 ≤ 3 % (issue 3), checked at dx = 1 mm and 0.5 mm (quick: 1 mm only). Measured
+    Target L2 ≤ 3 % (issue 3), checked at dx = 1 mm and 0.5 mm (quick: 1 mm only, no coarse rows). Measured
     (session 4, shifting band `numerics.shifting_surface: band`): 2.6 % at 1 mm, 1.4 % at 0.5 mm
     (first order). Before (session 3, shift normal part removed on the free-surface particles
     only): 2.5 % / 4.6 %, the error growing with refinement: the truncated support one layer under
@@ -126,7 +126,8 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     rows = []
     for dx in ((0.001,) if quick else (0.001, 0.0005)):
         rows.append(_bagnold_row(dx, theta_deg, t_end=BAGNOLD_T_END, t_avg=BAGNOLD_T_AVG))
-    for dx in (0.004, 0.002):
+    # the reported coarse rows need 20 s of flow (~3 min at 2 mm): not in the quick (smoke) suite
+    for dx in (() if quick else (0.004, 0.002)):
         rows.append(_bagnold_row(dx, theta_deg, tolerance=math.inf, t_end=BAGNOLD_T_END_COARSE,
                                  t_avg=BAGNOLD_T_AVG_COARSE))
     return rows
