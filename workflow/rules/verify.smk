@@ -46,6 +46,9 @@ rule verify_isph_part:
         f"{BENCH}/verification/isph.{{part}}.tsv"
     wildcard_constraints:
         part="|".join(VERIFY_ISPH_PARTS),
+    # the Bagnold part is the longest job of the chain (~12 min) and a leaf: started first, it runs
+    # beside the case runs instead of after them
+    priority: 50
     threads: 1
     resources:
         runtime=60,
