@@ -117,14 +117,19 @@ def test_flat_collapse_config_is_the_table2_material_on_a_horizontal_bed():
         v.flat_collapse_config("glass_beads", 0.0)
 
 
-def test_coarse_flat_collapse_spreads_slumps_and_stops_without_gaining_energy():
+def test_coarse_flat_collapse_spreads_loses_height_and_stops_without_gaining_energy():
     from granudep.isph.api import run_isph
     ds = run_isph(v.flat_collapse_config("glass_beads", 0.5, 0.008), progress=False)
     l0 = float(ds.attrs["L0"])
     assert ds.attrs["status"] == "at rest"
     assert l0 < float(ds["final_front_v99"]) < 3 * l0          # it spreads, not to the domain end
-    assert float(ds["y"].isel(time=-1).max()) < 0.5 * l0         # the column slumps below H0
-    assert float(ds.attrs["energy_max_excess"]) <= 0.01
+    # the column slumps: its potential energy falls (measured 16 % at 8 mm; the back corner of an
+    # a = 0.5 column stays put, so the highest particle does not move at this dx) and no particle rises
+    ep = ds["potential_energy"].values
+    assert ep[-1] < 0.9 * ep[0]
+    assert float(ds["y"].isel(time=-1).max()) <= float(ds["y"].isel(time=0).max()) + 1e-6
+    # never above E_0 by more than issue 11's dam-break bound (the run itself stops at 1 %)
+    assert float(ds.attrs["energy_max_excess"]) <= 0.005
     # rest: the first snapshot from which the max speed stays below rest_speed (0.1 m/s), not the
     # 5 t_c fallback that a flow never reaching 10x the rest speed used to get
     t, vmax, ts = ds["time"].values, ds["max_speed"].values, float(ds["time_to_rest"])

@@ -297,8 +297,7 @@ class IsphSolver:
         """Stage 1b: kernel values, ∇·r, concentration, renormalisation, free surface, wall contact."""
         c = self.cfg
         nf, h = self.nf, self.h
-        divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(nb, nf, h,
-                                                                     self.vol)
+        divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(nb, nf, h, self.vol)
         self.fs = divr < c.numerics.free_surface_threshold
         contact, col = walls.wall_contact(nb, nf, self.x, self.y, self.planes, self.dx, h,
                                           c.wall.cover_offset * self.dx)
