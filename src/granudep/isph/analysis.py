@@ -62,3 +62,39 @@ def failure_plane_angle(ds: xr.Dataset, t_norm: float = 1.0, v_crit: float = CRI
         angle = math.degrees(math.atan2(1.0, -slope))
         out.update(angle_deg=angle, angle_horizontal_deg=angle + theta, toe_x=float(intercept))
     return out
+
+
+def moving_share(u: np.ndarray, v: np.ndarray, speed: float = CRITICAL_SPEED) -> np.ndarray:
+    """Share of the granular mass (equal-mass particles) moving at ``speed`` or faster, per snapshot
+    (``u``, ``v``: time × particle)."""
+    u = np.asarray(u, dtype=float)
+    v = np.asarray(v, dtype=float)
+    if u.size == 0:
+        return np.zeros(u.shape[0])
+    return np.mean(u * u + v * v >= speed * speed, axis=1)
+
+
+def time_to_rest_mass_share(time: np.ndarray, u: np.ndarray, v: np.ndarray, share: float = 0.99,
+                            speed: float = CRITICAL_SPEED, duration: float = 0.1) -> float:
+    """The robust rest rule (issue 25): the start of the first window of ``duration`` in which at
+    least ``share`` of the mass moves slower than ``speed`` (at most 1 − share moves faster), after
+    the flow has started (more than 1 − share of the mass once moved at ``speed``). NaN when the
+    record never rests that long. Beside the every-particle rule of the run (``time_to_rest``: the
+    max speed of all particles below ``speed``), which one straggler can hold back.
+    """
+    t = np.asarray(time, dtype=float)
+    if not 0.0 < share < 1.0:
+        raise ValueError(f"share: must be in (0, 1) (got {share})")
+    moving = moving_share(u, v, speed) > 1.0 - share
+    started = np.maximum.accumulate(moving) if moving.size else moving
+    rest_since = math.nan
+    tol = 1e-9 * max(1.0, float(t[-1])) if t.size else 0.0
+    for k in range(t.size):
+        if started[k] and not moving[k]:
+            if math.isnan(rest_since):
+                rest_since = float(t[k])
+            if t[k] - rest_since >= duration - tol:
+                return rest_since
+        else:
+            rest_since = math.nan
+    return math.nan

@@ -99,11 +99,25 @@ class Rheology:
 
 @dataclass(frozen=True)
 class Wall:
-    slip: str = param("coulomb", choices=("no_slip", "navier", "free_slip", "coulomb"),
-                      doc="basal/back-wall condition for the viscous stress")
+    slip: str = param("coulomb", choices=("no_slip", "navier", "free_slip", "coulomb", "mu_w_i", "stress_limited"),
+                      doc="bed law (basal and back wall): no_slip (u_w = 0), navier (slip length b), free_slip, "
+                          "coulomb (friction tan phi_B times the walls' normal stress on the first layer), "
+                          "mu_w_i (rate-dependent friction mu(I_w), the bulk mu(I) law at the wall, I_w from the "
+                          "slip speed sheared over slip_shear_length), stress_limited (no slip while the wall "
+                          "shear stress stays below tan phi_B p_w, Coulomb sliding beyond: our reading of the "
+                          "paper's stress-based slip velocity); docs/paper-notes.md, 'Bed laws'")
     slip_length: float = param(0.0, ge=0.0, unit="m", doc="Navier slip length b (slip = navier)")
+    slip_shear_length: float | None = param(None, gt=0.0, unit="m",
+                                            doc="slip = mu_w_i: length over which the slip speed shears, "
+                                                "I_w = (|u_slip|/l) d / sqrt(p_w/rho_s); null = material.d "
+                                                "(one grain: the slip is the shear of the basal grain layer)")
     phi_basal_deg: float = param(_GB["phi_internal_deg"], gt=0.0, lt=90.0, unit="deg", was="phi_wall_deg",
-                                 doc="Coulomb wall friction angle phi_B (slip = coulomb)")
+                                 doc="Coulomb wall friction angle phi_B (slip = coulomb, stress_limited)")
+    bed_stress: str = param("bed", choices=("bed", "centre"),
+                            doc="slip = no_slip, navier with mu(I): the viscous wall stress of the first layer at "
+                                "the bed's normal stress (bed: eta_i p_w/p_i, p_w = rho a_n dx from the walls' "
+                                "reaction, never below p_i) or at the particle centre (centre: sessions 1-11; a sheet "
+                                "one particle thick holds half its weight and slides on)")
     stick_speed: float = param(1.0e-4, gt=0.0, unit="m s-1",
                                doc="Coulomb regularisation: below this tangential speed the wall friction is a stiff drag")
     contact_length: str = param("voronoi", choices=("voronoi", "dx"),
@@ -236,13 +250,19 @@ class IsphConfig:
         if g.periodic_length == 0:
             # a column on a bed comes to rest only if the slope is below the friction angles
             limits = [(self.material.phi_internal_deg, "material.phi_internal_deg")]
-            if self.wall.slip == "coulomb":
+            if self.wall.slip in ("coulomb", "stress_limited"):
                 limits.append((self.wall.phi_basal_deg, "wall.phi_basal_deg"))
             phi, key = min(limits)
             if g.theta_deg >= phi:
                 raise ConfigError(f"geometry.theta_deg: must be < {key} = {phi} for a column on a bed "
                                   f"(no rest is possible on a slope steeper than the friction angle; "
                                   f"got {g.theta_deg})")
+        reaction = self.wall.coulomb_normal == "projection" or (self.wall.coulomb_normal == "auto"
+                                                                and n.projection == "adjoint_pair")
+        if self.wall.slip in ("mu_w_i", "stress_limited") and not reaction:
+            raise ConfigError(f"wall.slip: {self.wall.slip} needs the walls' normal reaction (numerics.projection: "
+                              f"adjoint_pair with wall.coulomb_normal: auto or projection; got "
+                              f"{n.projection} / {self.wall.coulomb_normal})")
         if self.wall.coulomb_normal == "projection" and n.projection != "adjoint_pair":  # auto: never
             raise ConfigError("wall.coulomb_normal: projection needs numerics.projection: adjoint_pair (walls "
                               f"carrying pressure; got numerics.projection: {n.projection})")
@@ -287,6 +307,12 @@ class IsphConfig:
     def front_depth_threshold(self) -> float:
         t = self.output.front_depth_threshold
         return t if t is not None else 2.0 * self.material.d
+
+    @property
+    def wall_shear_length(self) -> float:
+        """ℓ of the wall inertial number (``wall.slip_shear_length``; default one grain, d)."""
+        ls = self.wall.slip_shear_length
+        return ls if ls is not None else self.material.d
 
     @property
     def wall_friction(self) -> float:

@@ -9,6 +9,7 @@ import xarray as xr
 from ..config import to_yaml
 from ..io import provenance, var
 from ..front import FRONT_MEASURE_DOC
+from .analysis import moving_share, time_to_rest_mass_share
 from .config import IsphConfig
 
 
@@ -23,6 +24,9 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
             return np.zeros((0, nf), dtype)
         return np.stack(f[name]).astype(dtype)
 
+    out = cfg.output
+    t_rest99 = time_to_rest_mass_share(t, stack("u", np.float64), stack("v", np.float64), 0.99, out.rest_speed,
+                                       out.rest_duration) if t.size else float("nan")
     front = np.asarray(snaps.front, dtype=float)
     final_front = float(front[-1]) if front.size else float("nan")
     m = cfg.material
@@ -40,7 +44,7 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
                                      "cumulative work of the discrete viscous stress and wall traction, "
                                      "m sum u*.(A - I)u* over the steps"),
             "wall_friction_energy": var(en["wall_friction"], ("time",), "J m-1",
-                                        "the Coulomb wall traction's share of dissipated_energy"),
+                                        "the wall traction's share of dissipated_energy (bed law: friction drag or viscous wall term)"),
             "outflow_energy": var(en["outflow"], ("time",), "J m-1",
                                   "kinetic + potential energy carried out through the downstream outflow"),
             "energy_residual": var(resid / eb.e_ref, ("time",), "1",
@@ -85,6 +89,11 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
             "final_front_position": var(final_front, (), "m", "front position at the end of the run"),
             "time_to_rest": var(float(time_to_rest), (), "s",
                                 "start of the first window of rest_duration with the max (rest_measure) speed of the mass < rest_speed"),
+            "time_to_rest_mass99": var(t_rest99, (), "s",
+                                       "start of the first window of rest_duration in which 99 % of the mass moves "
+                                       "slower than rest_speed (isph.analysis.time_to_rest_mass_share)"),
+            "moving_share": var(moving_share(stack("u", np.float64), stack("v", np.float64), out.rest_speed),
+                                ("time",), "1", "share of the mass moving at rest_speed or faster"),
             **energy_vars, **front_vars,
         },
         coords={
@@ -118,5 +127,6 @@ def build_dataset(cfg: IsphConfig, solver, snaps, status: str, time_to_rest: flo
         "energy_max_excess": float(eb.max_excess) if eb is not None else float("nan"),
         "energy_max_excess_time": float(eb.max_excess_time) if eb is not None else float("nan"),
         "time_to_rest_norm": float(time_to_rest / cfg.t_c) if math.isfinite(time_to_rest) else float("nan"),
+        "time_to_rest_mass99_norm": float(t_rest99 / cfg.t_c) if math.isfinite(t_rest99) else float("nan"),
     })
     return provenance(ds, case=cfg.case, config_yaml=to_yaml(cfg))

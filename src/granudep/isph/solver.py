@@ -321,7 +321,7 @@ class IsphSolver:
         if rh.model != "mu_i":
             return
         grad = operators.velocity_gradient(nb, nf, self.vol, self.x, self.y, self.u, self.v, geo.lmat, self.wall_surface,
-                                           self.slip, c.wall.slip_length, self.dx)
+                                           walls.gradient_slip_code(self.slip), c.wall.slip_length, self.dx)
         m = c.material
         if rh.regularisation == "none" and rh.mu_inf == 0.0:
             self.eta, self.gdot = viscous.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
@@ -359,18 +359,17 @@ class IsphSolver:
         c = self.cfg
         nf, rho = self.nf, self.rho
         indptr, indices, data, diag_v = viscous.assemble_viscous(nb, nf, self.vol, self.x, self.y,
-                                                                 self.eta, self.gdot, self.wall_surface, self.slip,
-                                                                 c.wall.slip_length, self.dx, dt, rho, self.eps2,
+                                                                 self.eta, self.gdot, self.wall_surface,
+                                                                 walls.viscous_slip_code(self.slip), c.wall.slip_length, self.dx, dt, rho, self.eps2,
                                                                  self.mean, self.lap_norm, self.wall_ns)
         wall_du = wall_dv = None
-        if self.slip == walls.SLIP_COULOMB:
+        if self.slip in walls.FRICTION_LAWS:
             diag_u = data[indptr[:-1]].copy()
             wall_du, wall_dv = diag_u.copy(), diag_v.copy()
             if self.reaction_friction:
                 if self.wall_an is None or self.wall_an.shape[0] != nf:
                     self.wall_an = np.zeros((nf, self.planes.shape[0]))
-                walls.coulomb_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, self.mu_wall, dt,
-                                                 self.u_eps, diag_u, diag_v)
+                self._reaction_drag(nb, dt, diag_u, diag_v)
             else:
                 if c.wall.contact_length == "voronoi":
                     clen = walls.contact_length(nb, nf, self.x, self.y, geo.contact, self.planes, self.dx)
@@ -382,6 +381,23 @@ class IsphSolver:
             data[indptr[:-1]] = diag_u
             wall_du = diag_u - wall_du
             wall_dv = diag_v - wall_dv
+        elif self.slip in (walls.SLIP_NO, walls.SLIP_NAVIER):
+            # the viscous wall term's share of the diagonal (already in the matrix), for the booking
+            kns = walls.viscous_wall_drag(nb, nf, self.x, self.y, self.eta, self.wall_surface, self.planes,
+                                          self.slip, c.wall.slip_length, self.dx, rho, self.vol, self.eps2,
+                                          self.lap_norm, self.wall_ns)
+            if (c.wall.bed_stress == "bed" and c.rheology.model == "mu_i" and self.reaction_friction
+                    and self.wall_an is not None and self.wall_an.shape[0] == nf):
+                # the μ(I) wall stress at the bed's normal stress p_w = ρ a_n dx, not the first
+                # layer's centre pressure (a sheet one particle thick held half its weight and slid on)
+                pw = rho * self.wall_an * self.dx
+                scale = np.where(self.wall_an > 0.0, np.maximum(pw / np.maximum(self.p_rheo, 1e-300)[:, None], 1.0), 1.0)
+                extra = kns * (scale - 1.0)
+                data[indptr[:-1]] += dt * (extra @ (self.planes[:, 1] ** 2))
+                diag_v = diag_v + dt * (extra @ (self.planes[:, 0] ** 2))
+                kns = kns * scale
+            wall_du = dt * (kns @ (self.planes[:, 1] ** 2))
+            wall_dv = dt * (kns @ (self.planes[:, 0] ** 2))
         # the velocity the viscous step starts from: uⁿ, less the old pressure impulse (incremental)
         u0, v0 = self.u, self.v
         if gp_old is not None:
@@ -413,9 +429,28 @@ class IsphSolver:
         # there: its pressure work is taken on u* + Δt/ρ G pⁿ)
         eb.dissipated += viscous_dissipation(self.m, u0, v0, us, vs, dt, self.gx, self.gy)
         if wall_du is not None:
-            # the Coulomb wall's share: its diagonal increments times u*² (the drag's work)
+            # the wall's share: its diagonal increments times u*² (the drag's work)
             eb.wall_friction += self.m * float(np.dot(wall_du, us * us) + np.dot(wall_dv, vs * vs))
         return us, vs
+
+    def _reaction_drag(self, nb: Pairs, dt: float, diag_u, diag_v) -> None:
+        """The bed law's traction from the walls' normal reaction, added to the viscous diagonals
+        (``wall.slip``: coulomb, mu_w_i or stress_limited; :mod:`.walls`)."""
+        c, nf = self.cfg, self.nf
+        if self.slip == walls.SLIP_COULOMB:
+            walls.coulomb_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, self.mu_wall, dt,
+                                             self.u_eps, diag_u, diag_v)
+        elif self.slip == walls.SLIP_MU_W_I:
+            m = c.material
+            walls.mu_w_i_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, m.mu_s, m.mu_2, m.I0, m.d,
+                                            m.rho_s, self.rho, self.dx, c.wall_shear_length, dt, self.u_eps,
+                                            diag_u, diag_v)
+        else:
+            kns = walls.viscous_wall_drag(nb, nf, self.x, self.y, self.eta, self.wall_surface, self.planes,
+                                          walls.SLIP_NO, 0.0, self.dx, self.rho, self.vol, self.eps2, self.lap_norm,
+                                          self.wall_ns)
+            walls.stress_limited_drag(nf, self.u, self.v, kns, self.p_rheo, self.wall_an, self.planes, self.mu_wall,
+                                      self.dx, dt, self.rho, self.u_eps, diag_u, diag_v)
 
     def _projection(self, nb: Pairs, geo: Geometry, lmat_p, dmat, us, vs, dt: float) -> None:
         """Stage 4: the pressure projection of u* (adjoint pair or approximate): pⁿ⁺¹ and uⁿ⁺¹."""

@@ -25,8 +25,28 @@ from numba import njit, prange
 from .parallel import prange_kernel
 
 
-SLIP_NO, SLIP_NAVIER, SLIP_FREE, SLIP_COULOMB = 0, 1, 2, 3
-SLIP_CODES = {"no_slip": SLIP_NO, "navier": SLIP_NAVIER, "free_slip": SLIP_FREE, "coulomb": SLIP_COULOMB}
+SLIP_NO, SLIP_NAVIER, SLIP_FREE, SLIP_COULOMB, SLIP_MU_W_I, SLIP_STRESS = 0, 1, 2, 3, 4, 5
+SLIP_CODES = {"no_slip": SLIP_NO, "navier": SLIP_NAVIER, "free_slip": SLIP_FREE, "coulomb": SLIP_COULOMB,
+              "mu_w_i": SLIP_MU_W_I, "stress_limited": SLIP_STRESS}
+# bed laws whose wall traction is a friction drag on the first particle layer (no viscous wall term
+# in the implicit viscous matrix; :func:`coulomb_drag_from_reaction`, :func:`mu_w_i_drag_from_reaction`,
+# :func:`stress_limited_drag`)
+FRICTION_LAWS = (SLIP_COULOMB, SLIP_MU_W_I, SLIP_STRESS)
+
+
+def viscous_slip_code(slip: int) -> int:
+    """The slip code the implicit viscous matrix is assembled with: the friction laws add their wall
+    traction to its diagonal afterwards (assembled as ``coulomb``: no viscous wall term)."""
+    return SLIP_COULOMB if slip in FRICTION_LAWS else slip
+
+
+def gradient_slip_code(slip: int) -> int:
+    """The slip code of the wall velocity in the rheology's velocity gradient: the sliding friction
+    laws (coulomb, mu_w_i) see no wall shear (β = 0, the layer slides, its friction is a contact
+    force); the stress-limited law sees the rigid bed (u_w = 0, as no_slip), whose shear it caps."""
+    if slip == SLIP_STRESS:
+        return SLIP_NO
+    return SLIP_COULOMB if slip == SLIP_MU_W_I else slip
 
 
 @njit(cache=True, inline="always")
@@ -231,3 +251,109 @@ def clamp_to_walls(nf, x, y, u, v, planes, dmin, lo, hi):
                     v[i] -= un * ny
                 moved += 1
     return moved
+
+
+@njit(cache=True, inline="always")
+def wall_inertial_number(ut, pw, rho_s, shear_length, d):
+    """Inertial number of the slip at a rigid rough bed (eq 4's I applied at the wall):
+    I_w = (|u_t|/ℓ) d / sqrt(p_w/ρ_s), the slip velocity sheared over ℓ (one grain, ℓ = d, by default)."""
+    if pw <= 0.0:
+        return np.inf
+    return ut / shear_length * d / math.sqrt(pw / rho_s)
+
+
+@njit(cache=True, inline="always")
+def wall_friction_mu_i(iw, mu_s, mu_2, i0):
+    """μ_w(I_w) = μ_s + (μ_2 − μ_s)/(I0/I_w + 1) (eq 4, the bulk law at the wall); μ_2 as I_w → ∞."""
+    if not iw < np.inf:
+        return mu_2
+    return mu_s + (mu_2 - mu_s) * iw / (i0 + iw)
+
+
+@prange_kernel
+def mu_w_i_drag_from_reaction(nf, u, v, a_n, planes, mu_s, mu_2, i0, d, rho_s, rho, dx, shear_length, dt, u_eps,
+                              diag_u, diag_v):
+    """Rate-dependent wall friction μ_w(I_w) (``wall.slip: mu_w_i``): as
+    :func:`coulomb_drag_from_reaction` with the coefficient μ_w(I_w) of :func:`wall_friction_mu_i` in
+    place of tan φ_B. The normal stress p_w = ρ a_n dx is the walls' reaction a_n (per unit mass)
+    carried on a bed length dx by the particle's volume dx²; I_w from the particle's tangential speed
+    at the start of the step (lagged: μ_w explicit, the drag implicit). Dissipative: the drag
+    coefficient is ≥ 0. At rest I_w → 0 and μ_w → μ_s: the static limit is the bulk's."""
+    for i in prange(nf):
+        for q in range(planes.shape[0]):
+            an = a_n[i, q]
+            if not an > 0.0:
+                continue
+            nx = planes[q, 0]
+            ny = planes[q, 1]
+            un = u[i] * nx + v[i] * ny
+            utx = u[i] - un * nx
+            uty = v[i] - un * ny
+            ut = math.sqrt(utx * utx + uty * uty)
+            iw = wall_inertial_number(ut, rho * an * dx, rho_s, shear_length, d)
+            kd = wall_friction_mu_i(iw, mu_s, mu_2, i0) * an / max(ut, u_eps)
+            diag_u[i] += dt * kd * ny * ny
+            diag_v[i] += dt * kd * nx * nx
+
+
+@prange_kernel
+def viscous_wall_drag(pairs, nf, x, y, eta, walls, planes, slip, slip_length, dx, rho, vol, eps2, lap_norm, wall_ns):
+    """Per particle and wall plane, the drag coefficient k (1/s) of the viscous wall term of
+    :func:`viscous.assemble_viscous` (its diagonal gets Δt k t_a² on the tangential component):
+    k = Σ_w 2 η_i V F_iw β / (ρ wall_ns) over the wall particles w of that plane, β of
+    :func:`wall_beta` for ``slip`` (no_slip or navier). Used to book the no-slip/Navier wall's share
+    of the dissipation and by :func:`stress_limited_drag`."""
+    start, nbr, rr, gw = pairs.start, pairs.nbr, pairs.rr, pairs.gw
+    wnx, wny, wc = walls.nx, walls.ny, walls.c
+    npl = planes.shape[0]
+    kns = np.zeros((nf, npl))
+    for i in prange(nf):
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            if j < nf:
+                continue
+            w = j - nf
+            q = 0
+            best = -2.0
+            for qq in range(npl):  # the plane of this wall particle: the one with its normal
+                dot = wnx[w] * planes[qq, 0] + wny[w] * planes[qq, 1]
+                if dot > best:
+                    best = dot
+                    q = qq
+            r = rr[k]
+            f = -gw[k] * r * r / (r * r + eps2)
+            beta = wall_beta(x[i], y[i], wnx[w], wny[w], wc[w], x[j], y[j], slip, slip_length, dx)
+            kns[i, q] += 2.0 * eta[i] / wall_ns * vol * f * beta / rho
+    return kns
+
+
+@prange_kernel
+def stress_limited_drag(nf, u, v, kns, p_rheo, a_n, planes, mu_wall, dx, dt, rho, u_eps, diag_u, diag_v):
+    """Stress-limited slip (``wall.slip: stress_limited``; our reading of the paper's Section 4.1
+    "slip velocity ... calculated based on the stress field"): the bed holds the first layer with the
+    no-slip viscous wall stress η ∂u/∂n (drag coefficient ``kns`` per plane, the no-slip wall term
+    of :func:`viscous_wall_drag`) as long as that stress stays below the Coulomb limit μ_B p_w;
+    beyond it the particle slips and the wall carries μ_B p_w (drag μ_B a_n/|u_t|, as
+    :func:`coulomb_drag_from_reaction`). Per particle and plane the diagonal gets
+    Δt min(k_ns, μ_B a_n/max(|u_t|, u_eps)) on the tangential component; a particle the wall does not
+    press on (a_n ≤ 0) is free to slide and to separate. Dissipative (coefficients ≥ 0).
+
+    The wall stress is the μ(I) stress at the bed, not at the particle's centre: k_ns p_w/p_i with
+    p_w = ρ a_n dx the walls' normal stress (p_i: the pressure the rheology saw). With η_i alone a
+    sheet one particle thick (p_i = ρ g cosθ dx/2, the half-layer floor) got half the basal friction
+    it needs (μ/2 < tan 22°) and slid on: at dx = 8 mm T22-A70 sent 163 particles 4 m down the bed."""
+    for i in prange(nf):
+        for q in range(planes.shape[0]):
+            an = a_n[i, q]
+            if not an > 0.0 or kns[i, q] <= 0.0:
+                continue
+            k_ns = kns[i, q] * max(rho * an * dx / max(p_rheo[i], 1e-300), 1.0)
+            nx = planes[q, 0]
+            ny = planes[q, 1]
+            un = u[i] * nx + v[i] * ny
+            utx = u[i] - un * nx
+            uty = v[i] - un * ny
+            ut = math.sqrt(utx * utx + uty * uty)
+            kd = min(k_ns, mu_wall * an / max(ut, u_eps))
+            diag_u[i] += dt * kd * ny * ny
+            diag_v[i] += dt * kd * nx * nx
