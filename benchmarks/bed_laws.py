@@ -52,14 +52,13 @@ def run_path(work: Path, case: str, law: str, dx: float) -> Path:
 
 def measure(nc: Path, case: str, law: str, dx: float) -> dict:
     """The table row of one stored run."""
-    import xarray as xr
-
     from granudep import cases
+    from granudep.io import open_dataset
     from granudep.monitor.api import monitor
     from granudep.regress.config import RegressConfig
     from granudep.regress.critical import critical_table
 
-    ds = xr.load_dataset(nc, decode_times=False)
+    ds = open_dataset(nc)
     l0 = float(ds.attrs["L0"])
     e_ref = float(ds.attrs["energy_ref"])
     row = {"case": case, "law": law, "dx_mm": dx * 1e3, "status": ds.attrs["status"],
