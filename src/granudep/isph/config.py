@@ -99,13 +99,14 @@ class Rheology:
 
 @dataclass(frozen=True)
 class Wall:
-    slip: str = param("coulomb", choices=("no_slip", "navier", "free_slip", "coulomb", "mu_w_i", "stress_limited"),
+    slip: str = param("no_slip", choices=("no_slip", "navier", "free_slip", "coulomb", "mu_w_i", "stress_limited"),
                       doc="bed law (basal and back wall): no_slip (u_w = 0), navier (slip length b), free_slip, "
                           "coulomb (friction tan phi_B times the walls' normal stress on the first layer), "
                           "mu_w_i (rate-dependent friction mu(I_w), the bulk mu(I) law at the wall, I_w from the "
                           "slip speed sheared over slip_shear_length), stress_limited (no slip while the wall "
                           "shear stress stays below tan phi_B p_w, Coulomb sliding beyond: our reading of the "
-                          "paper's stress-based slip velocity); docs/paper-notes.md, 'Bed laws'")
+                          "paper's stress-based slip velocity). Default no_slip since session 12 (a rough bed, "
+                          "as Farin et al. 2014's; coulomb before); docs/paper-notes.md, 'Bed laws'")
     slip_length: float = param(0.0, ge=0.0, unit="m", doc="Navier slip length b (slip = navier)")
     slip_shear_length: float | None = param(None, gt=0.0, unit="m",
                                             doc="slip = mu_w_i: length over which the slip speed shears, "
@@ -117,7 +118,9 @@ class Wall:
                             doc="slip = no_slip, navier with mu(I): the viscous wall stress of the first layer at "
                                 "the bed's normal stress (bed: eta_i p_w/p_i, p_w = rho a_n dx from the walls' "
                                 "reaction, never below p_i) or at the particle centre (centre: sessions 1-11; a sheet "
-                                "one particle thick holds half its weight and slides on)")
+                                "one particle thick holds half its weight and slides on). The bed stress needs the "
+                                "walls' reaction (numerics.projection: adjoint_pair); with the approximate projection "
+                                "the centre stress is used")
     stick_speed: float = param(1.0e-4, gt=0.0, unit="m s-1",
                                doc="Coulomb regularisation: below this tangential speed the wall friction is a stiff drag")
     contact_length: str = param("voronoi", choices=("voronoi", "dx"),

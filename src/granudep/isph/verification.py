@@ -204,8 +204,9 @@ def collapse_t22a70(quick: bool = False) -> list[dict]:
 def flat_collapse_config(material: str = "glass_beads", aspect: float = 0.5, dx: float = 0.002, L0: float = 0.1,
                          **numerics) -> dict:
     """Granular column collapse on a horizontal bed (issue 11's flat cases): a column L0 long and
-    a·L0 high of a Table 2 material against the back wall, 0.6 m of bed, the Coulomb bed with the
-    material's own friction angle (φ_B = φ), default scheme otherwise; run to rest."""
+    a·L0 high of a Table 2 material against the back wall, 0.6 m of bed, the default bed law (no slip
+    since session 12; φ_B = φ of the material for the Coulomb and stress-limited laws), default scheme
+    otherwise; run to rest."""
     from ..cases import check_case_name, material as table2_material
     if not aspect > 0.0:
         raise ValueError(f"aspect: must be > 0 (got {aspect})")
