@@ -131,18 +131,53 @@ def _restart(s, solver: str):
     """The checkpointed solver (default numerics) with another PPE solver and the ``--set`` scheme
     options (same state: a developed flow of the default scheme)."""
     from granudep.isph.config import load_config
-    s.cfg = load_config(s.cfg, **{"numerics.pressure_solver": solver, **SETS})
+    solver, _, operator = solver.partition("/")   # e.g. cg_dic/matrix_free: numerics.ppe_operator
+    over = {"numerics.ppe_operator": operator} if operator else {}
+    s.cfg = load_config(s.cfg, **{"numerics.pressure_solver": solver, **over, **SETS})
     s.stats.__init__()
     return s
 
 
+#: seconds spent in the parts of the step (issue 26), filled by the wrappers of :func:`_install_part_timers`
+PARTS: dict = {}
+
+
+def _install_part_timers() -> None:
+    """Time the PPE assembly (CSR product or matrix-free operator), the PPE solve, the viscous
+    assembly and the viscous solve inside every step (wrappers around the module functions)."""
+    from granudep.isph import projection, solver as solmod, viscous
+    if getattr(solmod, "_bench_parts", False):
+        return
+
+    def wrap(owner, name, key):
+        f = getattr(owner, name)
+
+        def g(*a, **k):
+            t0 = time.perf_counter()
+            try:
+                return f(*a, **k)
+            finally:
+                PARTS[key] = PARTS.get(key, 0.0) + time.perf_counter() - t0
+        setattr(owner, name, g)
+    wrap(projection, "assemble_adjoint_ppe", "ppe_assembly")
+    wrap(projection, "matrix_free_ppe", "ppe_assembly")
+    wrap(projection, "assemble_adjoint_triangles", "ppe_assembly")
+    wrap(solmod.IsphSolver, "_solve_ppe", "ppe_solve")
+    wrap(solmod.IsphSolver, "_solve_ppe_free", "ppe_solve")
+    wrap(viscous, "assemble_viscous", "visc_assembly")
+    wrap(solmod.IsphSolver, "_solve_cg_pair", "visc_solve")
+    solmod._bench_parts = True
+
+
 def time_steps(case: str, dx: float, t_flow: float, solver: str, steps: int) -> dict:
+    _install_part_timers()
     s = _restart(checkpoint(case, dx, t_flow), solver)
     for _ in range(2):  # hierarchy build / first-call overheads
         dt = s.time_step()
         s.dt = dt
         s.step(dt)
     s.stats.__init__()
+    PARTS.clear()
     t0 = time.perf_counter()
     c0 = time.process_time()
     for _ in range(steps):
@@ -156,7 +191,8 @@ def time_steps(case: str, dx: float, t_flow: float, solver: str, steps: int) -> 
     return {"dx_mm": dx * 1e3, "solver": solver, "particles": s.nf, "ms": 1e3 * wall / n, "cpu_ms": 1e3 * cpu / n,
             "neigh": 1e3 * st.t_neigh / n, "kern": 1e3 * st.t_kern / n, "visc": 1e3 * st.t_visc / n,
             "ppe": 1e3 * st.t_ppe / n, "it_ppe": st.ppe_iters / n, "it_visc": st.visc_iters / n,
-            "fallbacks": st.fallbacks}
+            "fallbacks": st.fallbacks, **{k: 1e3 * v / n for k, v in PARTS.items()},
+            "load": os.getloadavg()[0]}
 
 
 def fit_exponent(ns, ms) -> float:
@@ -190,6 +226,13 @@ def per_step(args) -> None:
                   f"{med['visc']:.2f}, {med['ppe']:.2f}]; iterations/step PPE {med['it_ppe']:.1f}, viscous (u+v) "
                   f"{med['it_visc']:.1f}; fallbacks {rr[0]['fallbacks']}; all ms: "
                   + ", ".join(f"{r['ms']:.2f}" for r in rr), flush=True)
+            parts = {k: statistics.median(r.get(k, 0.0) for r in rr)
+                     for k in ("ppe_assembly", "ppe_solve", "visc_assembly", "visc_solve")}
+            rest = med["ms"] - sum(parts.values())
+            print(f"      parts (ms/step, median): PPE assembly {parts['ppe_assembly']:.2f}, PPE CG "
+                  f"{parts['ppe_solve']:.2f}, viscous assembly {parts['visc_assembly']:.2f}, viscous CG "
+                  f"{parts['visc_solve']:.2f}, rest {rest:.2f}; load average "
+                  + ", ".join(f"{r['load']:.1f}" for r in rr), flush=True)
         if len(ns) > 1:
             cs = [statistics.median(r["cpu_ms"] for r in rows[(dx, solver)]) for dx in dxs]
             print(f"  {solver}: cost/step ~ N^{fit_exponent(ns, ts):.3f} (wall), N^{fit_exponent(ns, cs):.3f} (CPU) "

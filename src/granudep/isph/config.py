@@ -191,7 +191,8 @@ class Numerics:
                                          "pull the flow) is held at p = 0 from the next step until the flow "
                                          "presses into it again")
     kernel_completion: bool = param(True, doc="PPE: missing neighbours next to the free surface count as p = 0")
-    pressure_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic", "cg_two_level", "amg_sa", "amg_rs"),
+    pressure_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic", "cg_two_level", "cg_ssor", "amg_sa",
+                                                     "amg_rs"),
                                  doc="PPE: SuperLU factorisation, Jacobi-preconditioned CG (warm start; scipy's "
                                      "iterates bit for bit), CG with diagonal incomplete Cholesky (Eisenstat; "
                                      "~2.5x fewer iterations, ~2x faster, true-residual stopping test; with "
@@ -200,7 +201,15 @@ class Numerics:
                                      "dx-independent iterations), or CG "
                                      "preconditioned by an algebraic-multigrid V-cycle (pyamg, optional package: "
                                      "smoothed aggregation or Ruge-Stuben; N-independent iterations but slower "
-                                     "at 3.7k-60k particles, see docs/paper-notes.md)")
+                                     "at 3.7k-60k particles, see docs/paper-notes.md); cg_ssor: CG with the "
+                                     "symmetric Gauss-Seidel (SSOR, omega = 1) preconditioner in Eisenstat form, "
+                                     "which never breaks down (adjoint-pair PPE at 4 mm: 47 -> 29 iterations; "
+                                     "docs/speed.md)")
+    ppe_operator: str = param("assembled", choices=("assembled", "matrix_free"),
+                              doc="adjoint_pair PPE with the two-level CG (pressure_solver cg_dic or "
+                                  "cg_two_level): the matrix assembled as the product (1 - eps) D D^T + eps L_c "
+                                  "(CSR), or applied unassembled as D (D^T x) + eps L_c x (the same operator; "
+                                  "no product to form, each iteration dearer; docs/speed.md)")
     viscous_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic"),
                                 doc="implicit viscous step: SuperLU, Jacobi-preconditioned CG (u and v in lock-step) "
                                     "or DIC-preconditioned CG, warm-started from the right-hand side")
@@ -272,6 +281,11 @@ class IsphConfig:
         if n.pressure_correction == "incremental" and n.projection != "adjoint_pair":  # auto: never
             raise ConfigError("numerics.pressure_correction: incremental needs numerics.projection: adjoint_pair "
                               f"(got numerics.projection: {n.projection}); use auto or non_incremental")
+        if n.ppe_operator == "matrix_free" and (n.projection != "adjoint_pair"
+                                                or n.pressure_solver not in ("cg_dic", "cg_two_level")):
+            raise ConfigError("numerics.ppe_operator: matrix_free needs numerics.projection: adjoint_pair and "
+                              "numerics.pressure_solver: cg_dic or cg_two_level (got "
+                              f"{n.projection} / {n.pressure_solver})")
         if g.L0 < 2 * n.dx or g.H0 < 2 * n.dx:
             raise ConfigError(f"numerics.dx: must be <= min(L0, H0)/2 = {min(g.L0, g.H0) / 2} (got {n.dx})")
         npart = (g.L0 / n.dx) * (g.H0 / n.dx)

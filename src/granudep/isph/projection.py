@@ -180,7 +180,8 @@ def compact_laplacian_edges(pairs, nf, vol, eps2, lap_norm):
 
 
 def adjoint_pair_projection(pairs, nf, nw, vol, lmat, walls, fs, p_fs, us, vs, conc, c0, relax, dt, rho, eps2,
-                            lap_norm, stab, guess, solve, wall_dry, max_passes=1, release=True, entries=None):
+                            lap_norm, stab, guess, solve, wall_dry, max_passes=1, release=True, entries=None,
+                            solve_free=None, free_form="free"):
     """Solve ((1 − ε) D Dᵀ + ε L_c) p = −(ρ/Δt) D u* + s on the interior granular and the wetted wall nodes
     (free-surface particles: p = ``p_fs``; dry or pulling walls: p = 0) and return the node
     pressures (nf + nw), the corrector's G p = −Dᵀ p (x and y), the wall nodes to keep dry at the
@@ -192,7 +193,10 @@ def adjoint_pair_projection(pairs, nf, nw, vol, lmat, walls, fs, p_fs, us, vs, c
     flow presses into it again (D u < 0 there after a projection); within a step up to
     ``max_passes`` solves release walls, the last solve is used as it is (a wall may pull for that
     one step: the energy identity holds for the system actually solved). ``entries``: D in COO
-    (:func:`divergence_entries` of these arguments) when the caller has it already."""
+    (:func:`divergence_entries` of these arguments) when the caller has it already. ``solve_free``:
+    when given, the matrix is never assembled: ``solve_free(op, rhs, guess, assemble)`` gets the
+    operator of :func:`matrix_free_ppe` (``assemble()`` returns the CSR, for a direct fallback), or
+    with ``free_form="triangles"`` the triangles of :func:`assemble_adjoint_triangles`."""
     n = nf + nw
     rows, cols, cx, cy = (entries if entries is not None else divergence_entries(pairs, nf, vol, lmat, walls))
     ei, ej, ea = compact_laplacian_edges(pairs, nf, vol, eps2, lap_norm)
@@ -214,9 +218,18 @@ def adjoint_pair_projection(pairs, nf, nw, vol, lmat, walls, fs, p_fs, us, vs, c
         if unk.size == 0:
             break
         p[unk] = 0.0
-        indptr, indices, data, rhs = assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown,
-                                                          unk.size, p, b)
-        p[unk] = solve(indptr, indices, data, rhs, guess[unk])
+        if solve_free is not None:
+            # matrix-free (numerics.ppe_operator): the same operator applied as D_U (D_Uᵀ x) + ε L_c x
+            build = assemble_adjoint_triangles if free_form == "triangles" else matrix_free_ppe
+            op, rhs = build(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b)
+
+            def assemble(unknown=unknown, m=unk.size, p=p.copy()):
+                return assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, m, p, b)[:3]
+            p[unk] = solve_free(op, rhs, guess[unk], assemble)
+        else:
+            indptr, indices, data, rhs = assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown,
+                                                              unk.size, p, b)
+            p[unk] = solve(indptr, indices, data, rhs, guess[unk])
         pull = unk[(unk >= nf) & (p[unk] < 0.0)] if release else np.zeros(0, np.int64)
         released += int(pull.size)
         if pull.size == 0 or k == max_passes - 1:
@@ -480,3 +493,231 @@ def wall_normal_acceleration(pairs, nf, vol, lmat, walls, p, rho, planes):
                     out[i, k] += f
                     break
     return out
+
+
+# ------------------------------------------------------------------------------------------------
+# Matrix-free PPE (``numerics.ppe_operator: matrix_free``, issue 26): the assembled product D Dᵀ has
+# ~63 entries per row and its Gustavson assembly cost as much as ~40 products with it (T22-A150,
+# 3750 particles). Applied as D_U (D_Uᵀ x) + ε L_c x it is the same matrix (the same sums in another
+# order: products agree to ~1e-15 relative, tests/isph/test_ppe_free.py) from ~19 D entries and ~18
+# L_c entries per row, built in one counting-sort pass.
+# ------------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _matrix_free_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+    """The operator ((1 − ε) D Dᵀ + ε L_c) restricted to the unknown nodes, unassembled, and its
+    right-hand side b_U − A_UK p_K (the same system as :func:`assemble_adjoint_ppe`).
+
+    Returns (op, rhs); op = (wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval): D_U by
+    unknown row (columns: particles) and by particle (rows: unknown indices), both CSR, wd = 1 − ε;
+    ε L_c restricted to the unknowns by row with its diagonal first (``lval`` holds ε a_e; the
+    diagonal sums the edges to known nodes too). See :func:`linsolve.free_matvec`."""
+    wd = 1.0 - stab
+    # D_U by unknown row and by particle
+    rptr = np.zeros(n_unknown + 1, np.int64)
+    cptr = np.zeros(nf + 1, np.int64)
+    for q in range(rows.size):
+        r = unknown[rows[q]]
+        if r >= 0:
+            rptr[r + 1] += 1
+            cptr[cols[q] + 1] += 1
+    for r in range(n_unknown):
+        rptr[r + 1] += rptr[r]
+    for i in range(nf):
+        cptr[i + 1] += cptr[i]
+    m = rptr[n_unknown]
+    rcol = np.empty(m, np.int32)
+    rx = np.empty(m)
+    ry = np.empty(m)
+    crow = np.empty(m, np.int32)
+    ccx = np.empty(m)
+    ccy = np.empty(m)
+    rf = rptr[:-1].copy()
+    cf = cptr[:-1].copy()
+    for q in range(rows.size):
+        r = unknown[rows[q]]
+        if r >= 0:
+            k = rf[r]
+            rcol[k] = cols[q]
+            rx[k] = cx[q]
+            ry[k] = cy[q]
+            rf[r] += 1
+            i = cols[q]
+            k = cf[i]
+            crow[k] = r
+            ccx[k] = cx[q]
+            ccy[k] = cy[q]
+            cf[i] += 1
+    # ε L_c on the unknowns: diagonal first, then the unknown neighbours
+    lptr = np.zeros(n_unknown + 1, np.int64)
+    for e in range(ei.size):
+        a = unknown[ei[e]]
+        c = unknown[ej[e]]
+        if a >= 0 and c >= 0:
+            lptr[a + 1] += 1
+            lptr[c + 1] += 1
+    for r in range(n_unknown):
+        lptr[r + 1] += lptr[r] + 1
+    lcol = np.empty(lptr[n_unknown], np.int32)
+    lval = np.zeros(lptr[n_unknown])
+    lf = lptr[:-1] + 1
+    for r in range(n_unknown):
+        lcol[lptr[r]] = r
+    # the right-hand side: b_U − (1 − ε) D_U (D_Kᵀ p_K) − ε (L_c p_K)_U
+    rhs = np.empty(n_unknown)
+    for a in range(n):
+        if unknown[a] >= 0:
+            rhs[unknown[a]] = b[a]
+    for e in range(ei.size):
+        a = unknown[ei[e]]
+        c = unknown[ej[e]]
+        w = stab * ea[e]
+        if a >= 0:
+            lval[lptr[a]] += w
+            if c >= 0:
+                lcol[lf[a]] = c
+                lval[lf[a]] = -w
+                lf[a] += 1
+            else:
+                rhs[a] += w * p[ej[e]]
+        if c >= 0:
+            lval[lptr[c]] += w
+            if a >= 0:
+                lcol[lf[c]] = a
+                lval[lf[c]] = -w
+                lf[c] += 1
+            else:
+                rhs[c] += w * p[ei[e]]
+    gx = np.zeros(nf)
+    gy = np.zeros(nf)
+    known = False
+    for q in range(rows.size):
+        a = rows[q]
+        if unknown[a] < 0 and p[a] != 0.0:
+            gx[cols[q]] += cx[q] * p[a]
+            gy[cols[q]] += cy[q] * p[a]
+            known = True
+    if known:
+        for r in range(n_unknown):
+            s = 0.0
+            for k in range(rptr[r], rptr[r + 1]):
+                s += rx[k] * gx[rcol[k]] + ry[k] * gy[rcol[k]]
+            rhs[r] -= wd * s
+    return (wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval), rhs
+
+
+matrix_free_ppe = _matrix_free_ppe
+
+
+@njit(cache=True)
+def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+    """The matrix of :func:`assemble_adjoint_ppe` as its strict lower and upper triangles and its
+    diagonal, in :func:`linsolve.split_triangles`' layout (uint64 row pointers, uint32 columns, the
+    lower rows by ascending and the upper rows by descending column), and its right-hand side; for
+    the SSOR-preconditioned CG (``numerics.pressure_solver: cg_ssor``, :func:`linsolve.pcg_dic_split`).
+
+    Only the upper triangle is computed (the product is symmetric): row a takes, for each particle
+    i of its D_U row, the nodes b > a of column i (the columns sorted by node, scanned from the end),
+    plus its L_c entries b > a; the lower triangle is its transpose. Half the multiply-adds of the
+    row-by-row product and no CSR to split. Returns (lp, li, lv, up, ui, uv, diag, rhs)."""
+    op, rhs = _matrix_free_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b)
+    wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval = op
+    m = n_unknown
+    # each column by ascending node (insertion sort: the columns come nearly sorted)
+    for i in range(nf):
+        c0 = cptr[i]
+        for t in range(c0 + 1, cptr[i + 1]):
+            r = crow[t]
+            vx = ccx[t]
+            vy = ccy[t]
+            u = t
+            while u > c0 and crow[u - 1] > r:
+                crow[u] = crow[u - 1]
+                ccx[u] = ccx[u - 1]
+                ccy[u] = ccy[u - 1]
+                u -= 1
+            crow[u] = r
+            ccx[u] = vx
+            ccy[u] = vy
+    diag = np.empty(m)
+    up = np.zeros(m + 1, np.int64)
+    slot = np.full(m, -1, np.int32)
+    # bounds: a row meets at most the entries of its particles' columns and its L_c row
+    total = 0
+    cap = 1
+    for a in range(m):
+        e = lptr[a + 1] - lptr[a]
+        for k in range(rptr[a], rptr[a + 1]):
+            e += cptr[rcol[k] + 1] - cptr[rcol[k]]
+        total += e
+        cap = max(cap, e)
+    lst = np.empty(cap, np.int32)
+    acc = np.empty(cap)
+    ui = np.empty(max(1, total // 2 + m), np.uint32)
+    uv = np.empty(ui.size)
+    pos = 0
+    for a in range(m):
+        cnt = 0
+        d = 0.0
+        for k in range(rptr[a], rptr[a + 1]):
+            i = rcol[k]
+            ax = rx[k]
+            ay = ry[k]
+            d += ax * ax + ay * ay
+            t = cptr[i + 1] - 1
+            while t >= cptr[i] and crow[t] > a:
+                c = crow[t]
+                s = slot[c]
+                if s < 0:
+                    s = cnt
+                    slot[c] = cnt
+                    lst[cnt] = c
+                    acc[cnt] = 0.0
+                    cnt += 1
+                acc[s] += wd * (ax * ccx[t] + ay * ccy[t])
+                t -= 1
+        diag[a] = wd * d + lval[lptr[a]]
+        for k in range(lptr[a] + 1, lptr[a + 1]):
+            c = lcol[k]
+            if c > a:
+                s = slot[c]
+                if s < 0:
+                    s = cnt
+                    slot[c] = cnt
+                    lst[cnt] = c
+                    acc[cnt] = 0.0
+                    cnt += 1
+                acc[s] += lval[k]
+        for t in range(cnt):            # in the order met (sorted by the transpositions below)
+            c = lst[t]
+            slot[c] = -1
+            ui[pos + t] = c
+            uv[pos + t] = acc[t]
+        pos += cnt
+        up[a + 1] = pos
+    # the lower triangle: the transpose (rows visited in ascending order: each lower row by ascending
+    # column); then the upper one again as the transpose of the lower, its rows visited in descending
+    # order (each upper row by descending column). Two counting sorts instead of sorting every row.
+    lp = np.zeros(m + 1, np.int64)
+    for k in range(pos):
+        lp[ui[k] + 1] += 1
+    for a in range(m):
+        lp[a + 1] += lp[a]
+    li = np.empty(pos, np.uint32)
+    lv = np.empty(pos)
+    fill = lp[:-1].copy()
+    for a in range(m):
+        for k in range(up[a], up[a + 1]):
+            c = ui[k]
+            li[fill[c]] = a
+            lv[fill[c]] = uv[k]
+            fill[c] += 1
+    fill[:] = up[:-1]
+    for c in range(m - 1, -1, -1):
+        for k in range(lp[c], lp[c + 1]):
+            a = li[k]
+            ui[fill[a]] = c
+            uv[fill[a]] = lv[k]
+            fill[a] += 1
+    return (lp.astype(np.uint64), li, lv, up.astype(np.uint64), ui[:pos].copy(), uv[:pos].copy(), diag), rhs

@@ -42,6 +42,7 @@ from .rheology import ill_posed_bounds, regularisation_constant, regularised_vis
 from .projection import (adjoint_divergence, adjoint_pair_projection, apply_gradient, divergence_entries,
                          wall_normal_acceleration)
 from .linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pcg_two_level,
+                       pcg_two_level_free, pcg_dic_split,
                        pin_blas_to_one_thread)
 from .bundles import Pairs, WallSurface, pairs_of
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
@@ -533,7 +534,8 @@ class IsphSolver:
             nb, nf, nw, self.vol, lmat_p, self.wall_surface, self.fs, self.p_fs, us, vs, conc, self.c0,
             self.density_relaxation(dt), dt, self.rho, self.eps2, self.lap_norm,
             c.numerics.projection_stabilisation, guess, self._solve_ppe, self.wall_dry,
-            release=c.numerics.wall_release, entries=dmat)
+            release=c.numerics.wall_release, entries=dmat,
+            solve_free=self._solve_ppe_free if self._ppe_form != "csr" else None, free_form=self._ppe_form)
         self.stats.walls_released += released
         self.p = p[:nf]
         self.p_wall = p[nf:]
@@ -606,7 +608,35 @@ class IsphSolver:
         if solver == "cg_dic" and self.cfg.numerics.projection == "adjoint_pair":
             solver = "cg_two_level"
         return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
-                              method={"cg_dic": "dic", "cg_two_level": "two_level"}.get(solver, "jacobi"))
+                              method={"cg_dic": "dic", "cg_two_level": "two_level", "cg_ssor": "ssor"}.get(solver,
+                                                                                                        "jacobi"))
+
+    @property
+    def _ppe_form(self) -> str:
+        """How the adjoint-pair PPE reaches its solver: ``csr`` (assembled), ``free`` (matrix-free,
+        ``numerics.ppe_operator``) or ``triangles`` (``cg_ssor``: the SSOR sweeps' two triangles)."""
+        n = self.cfg.numerics
+        if n.pressure_solver == "cg_ssor":
+            return "triangles"
+        return "free" if n.ppe_operator == "matrix_free" else "csr"
+
+    def _solve_ppe_free(self, op, rhs, guess, assemble):
+        """The adjoint-pair PPE as a matrix-free operator (two-level CG) or as its two triangles
+        (SSOR-CG); the assembled matrix by SuperLU if it fails (:meth:`_solve_cg`)."""
+        rtol = self.cfg.numerics.solver_rtol
+        try:
+            if len(op) == 7:
+                sol, it, info = pcg_dic_split(*op, rhs, guess, rtol, 0.0, 1000, -1.0)
+            else:
+                sol, it, info = pcg_two_level_free(op, rhs, guess, rtol, 0.0, 1000)
+        except (ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError) as exc:
+            sol, it, info = guess, 0, BREAKDOWN
+            LOG.warning("isph %s: ppe CG raised %r", self.cfg.case, exc)
+        self.stats.ppe_iters += it
+        why = self._why(info, sol)
+        if why is not None:
+            return self._fallback(*assemble(), rhs, "ppe", why)
+        return sol
 
     def _direct(self, indptr, indices, data, rhs, kind):
         """SuperLU; a singular matrix stops the run as a blow-up (partial output kept)."""
@@ -661,9 +691,9 @@ class IsphSolver:
         or does not converge in 1000 iterations."""
         rtol = self.cfg.numerics.solver_rtol
         try:
-            if method == "dic":
+            if method in ("dic", "ssor"):
                 sol, it, info = pcg_dic(indptr, indices, data, rhs, guess, rtol, 0.0, 1000,
-                                        self.cfg.numerics.ic_modification)
+                                        -1.0 if method == "ssor" else self.cfg.numerics.ic_modification)
             elif method == "two_level":
                 sol, it, info = pcg_two_level(indptr, indices, data, rhs, guess, rtol, 0.0, 1000)
             else:
