@@ -126,6 +126,7 @@ def step(x, u, V, V0, nd_prev, dep, depb, binv, p, tab):
         huc = p.momentum_scale * (s1["b"][T_A] * xn_ + s1["b"][T_B])
         hu = np.abs(u) * h
         dec = live & (h > 0) & (huc > 0) & (hu < huc) & (dhu < 0)
+        dec &= np.abs(s1["b"][T_SIN]) <= p.deposit_max_tan * s1["b"][T_COS]   # no deposit steeper than φ_B
         alpha = np.where(dec, (huc - hu) / np.where(huc > 0, huc, 1.0), 0.0)
         sd = alpha * dhu / np.maximum(np.abs(u), p.u_min)
         fr = np.where(dec, np.minimum(1.0, -sd * dt / np.where(h > 0, h, 1.0)), 0.0)

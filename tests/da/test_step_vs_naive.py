@@ -15,7 +15,7 @@ from granudep.da.config import resolve
 from granudep.da.path import N_TABLE, T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
 from granudep.da.solver import Physics, constant_bed_table, step_params
 from granudep.da.sph import F_H, F_ND, F_U, F_V, F_V0, N_FIELDS
-from granudep.da.step import MAX_STEPS, StepParams, advance
+from granudep.da.step import MAX_STEPS, StepParams, advance, own_trail
 
 N = 48
 
@@ -41,7 +41,7 @@ def _kernel_step(x, u, V, V0, nd, dep, depb, binv, p, tab, ng_env=0):
     env = np.zeros((3, ng_env))
     env[2] = np.inf
     out = advance(xk, F, order, dep, depb if p.has_width else dep, binv, env, np.zeros(3), 0.0, 10.0,
-                  p._replace(max_steps=1), tab, 0)
+                  p._replace(max_steps=1), tab, 0, own_trail(x.size))
     assert out[2] == MAX_STEPS and out[1] == 1          # exactly one step taken
     assert np.all(order == np.arange(x.size))           # the test states stay sorted
     return xk, F, dep, depb, out[5], out[4]
@@ -84,8 +84,10 @@ def test_constant_slope_step_matches_naive(deposition):
     assert F[F_U, 5] == 0.0 and xk[5] == x[5]             # an emptied particle stays put
 
 
-def test_path_step_matches_naive_with_width_curvature_and_relative_dt():
-    """A bed table with varying slope, curvature and width (the path model's stage functions)."""
+@pytest.mark.parametrize("max_tan", [math.inf, math.tan(math.radians(25.5))])
+def test_path_step_matches_naive_with_width_curvature_and_relative_dt(max_tan):
+    """A bed table with varying slope, curvature and width (the path model's stage functions);
+    deposition on every slope, or none where the bed (30° -> 12°) is steeper than φ_B = 25.5°."""
     rng = np.random.default_rng(11)
     cfg, p0, _ = _constant_case(True)
     ns, ds = 60, 0.005
@@ -99,7 +101,7 @@ def test_path_step_matches_naive_with_width_curvature_and_relative_dt():
     tab[T_KACT], tab[T_KPASS] = 0.9, 2.0
     tab[T_A], tab[T_B] = -0.02 - 0.05 * s, 2.0
     p = p0._replace(origin=0.01, ds=ds, centripetal=True, has_width=True, dt_relative=True, geometry_step=0.004,
-                    x_min=0.0)
+                    x_min=0.0, deposit_max_tan=max_tan)
     x, u, V, V0, nd = _state(rng)
     ng = 240
     dep = np.zeros(ng)
@@ -113,8 +115,13 @@ def test_path_step_matches_naive_with_width_curvature_and_relative_dt():
     for mine, ref, what in ((F[F_H], h, "depth"), (F[F_U], un, "velocity"), (xk - x, xn - x, "displacement"),
                             (F[F_V], Vn, "volume"), (depk, depn, "deposit"), (depbk, depbn, "deposit/width")):
         _compare(mine, ref, what)
-    assert np.count_nonzero(fr) > 5
-
+    tan_b = math.tan(math.radians(25.5))
+    steep = np.abs(np.interp(x + p.origin, s, tab[T_SIN])) > tan_b * np.interp(x + p.origin, s, tab[T_COS])
+    assert np.count_nonzero(steep) > 5
+    if max_tan == math.inf:
+        assert np.count_nonzero(fr) > 5 and np.count_nonzero(fr[steep]) > 5   # the branch is exercised
+    else:
+        assert not np.any(fr[steep])                        # no deposit where it could not rest
 
 def test_step_params_is_a_typed_record():
     """The kernels take one NamedTuple, typed field by field (no float-coded flags)."""

@@ -44,7 +44,7 @@ import numpy as np
 from .path import N_TABLE, T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
 from .solver import (AT_REST, ESCAPED, F_ND, F_U, F_V, F_V0, MAX_STEPS, N_FIELDS, NONFINITE, RUNNING,  # noqa: F401
                      grid_depth, particle_depths, smooth_deposit, smoothing_length, step_params)
-from .step import D_DEFICIT, D_LIFT, D_WHERE, E_H, E_T, E_U, advance, mark_envelopes  # noqa: F401
+from .step import D_DEFICIT, D_LIFT, D_WHERE, E_H, E_T, E_U, advance, mark_envelopes, own_trail  # noqa: F401
 
 # time_step 'relative': |u| Δt <= CFL · GEOMETRY_STEP · σ (σ the path's smoothing length)
 GEOMETRY_STEP = 0.25
@@ -217,6 +217,7 @@ def simulate_path(cfg, setup: PathSetup, phys, tab: np.ndarray, label: str = "",
     env[E_T] = np.inf
     diag = np.zeros(3)
     prm = path_params(cfg, setup, phys, cent)
+    own = own_trail(x.shape[0], prm.deposition and prm.deposit_as_bed and not prm.own_deposit)
     rec = PathRecord(x_edges=edges, x_inf=phys.x_inf, A=phys.A, B=phys.B, envelopes=env, diag=diag)
     thr = cfg.front_threshold
     L = smoothing_length(F, prm)
@@ -231,7 +232,7 @@ def simulate_path(cfg, setup: PathSetup, phys, tab: np.ndarray, label: str = "",
     while True:
         t_target = min(k * dt_out, t_end)
         t, steps, status, where, L, dt = advance(x, F, order, dep, depb, binv, env, diag, t, t_target, prm, tab,
-                                                 steps)
+                                                 steps, own)
         if status in (RUNNING, AT_REST):
             _record(rec, cfg, setup, x, F, order, dep, t, L, dt, steps, dxg, ng, width_c, thr)
         if progress is not None:

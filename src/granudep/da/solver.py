@@ -29,7 +29,7 @@ import numpy as np
 from .path import N_TABLE, T_A, T_B, T_COS, T_KACT, T_KPASS, T_SIN, T_WIDTH
 from .sph import (F_H, F_ND, F_U, F_V, F_V0, N_FIELDS, deposit_gradient, evaluate, grid_depth,  # noqa: F401
                   particle_depths)
-from .step import AT_REST, ESCAPED, MAX_STEPS, NONFINITE, RUNNING, StepParams, advance, smoothing_length
+from .step import AT_REST, ESCAPED, MAX_STEPS, NONFINITE, RUNNING, StepParams, advance, own_trail, smoothing_length
 
 
 # ----------------------------------------------------------------------------------------------
@@ -92,7 +92,9 @@ def step_params(cfg, phys: Physics) -> StepParams:
         tan_phi_basal=math.tan(math.radians(mat.phi_basal_deg)) if num.basal_friction else 0.0,
         min_volume_fraction=float(dep.min_volume_fraction), dx_grid=float(cfg.output.dx_grid),
         origin=0.0, ds=float(cfg.geometry.domain_end), centripetal=False, has_width=False, dt_relative=False,
-        geometry_step=math.inf, front_threshold=float(cfg.front_threshold))
+        geometry_step=math.inf, front_threshold=float(cfg.front_threshold),
+        own_deposit=dep.own_deposit == "include",
+        deposit_max_tan=math.tan(math.radians(mat.phi_basal_deg)) if dep.steep_bed == "no_deposit" else math.inf)
 
 
 def constant_bed_table(theta: float, phys: Physics) -> np.ndarray:
@@ -109,9 +111,9 @@ def constant_bed_table(theta: float, phys: Physics) -> np.ndarray:
     return tab
 
 
-def run_kernel(x, F, order, dep, t, t_target, p: StepParams, tab, nsteps):
+def run_kernel(x, F, order, dep, t, t_target, p: StepParams, tab, nsteps, own):
     """``step.advance`` for a constant slope (no width, no envelopes, no lift-off)."""
-    return advance(x, F, order, dep, dep, _NO_CELLS, _NO_ENVELOPES, np.zeros(3), t, t_target, p, tab, nsteps)
+    return advance(x, F, order, dep, dep, _NO_CELLS, _NO_ENVELOPES, np.zeros(3), t, t_target, p, tab, nsteps, own)
 
 
 _NO_CELLS = np.zeros(0)
@@ -204,10 +206,11 @@ def simulate(cfg, phys: Physics, label: str = "", progress=None, init=None, chec
     dt_out, t_end = cfg.output.dt_output, cfg.numerics.t_end
     state = checkpoint.resume() if checkpoint is not None else None
     if state is not None:  # continue exactly where the checkpointed run stood after output k - 1
-        x, F, order, dep, rec, t, steps, k = state
+        x, F, order, dep, rec, t, steps, k, own = state
     else:
         x, F, order = initial_state(cfg) if init is None else custom_state(*init)
         dep = np.zeros(ng)
+        own = own_trail(x.shape[0], prm.deposition and prm.deposit_as_bed and not prm.own_deposit)
         rec = RunRecord(x_edges=edges, x_inf=phys.x_inf, A=phys.A, B=phys.B)
         L = smoothing_length(F, prm)
         _record(rec, cfg, x, F, order, dep, 0.0, L, 0.0, 0, dxg, ng, thr)
@@ -215,7 +218,7 @@ def simulate(cfg, phys: Physics, label: str = "", progress=None, init=None, chec
         k = 1
     while True:
         t_target = min(k * dt_out, t_end)
-        t, steps, status, where, L, dt = run_kernel(x, F, order, dep, t, t_target, prm, tab, steps)
+        t, steps, status, where, L, dt = run_kernel(x, F, order, dep, t, t_target, prm, tab, steps, own)
         if status in (RUNNING, AT_REST):
             _record(rec, cfg, x, F, order, dep, t, L, dt, steps, dxg, ng, thr)
         if progress is not None:
@@ -240,6 +243,6 @@ def simulate(cfg, phys: Physics, label: str = "", progress=None, init=None, chec
             break
         k += 1
         if checkpoint is not None:
-            checkpoint.at_output(lambda: (x, F, order, dep, rec, t, steps, k))
+            checkpoint.at_output(lambda: (x, F, order, dep, rec, t, steps, k, own))
     rec.n_steps = steps
     return rec

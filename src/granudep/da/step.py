@@ -35,6 +35,7 @@ from .physics import (alpha_coefficient, bed_normal_acceleration, coulomb_update
                       deposited_fraction, deposition_rate, deposition_velocity_loss, depth_from_area,
                       depth_gradient_from_area, driving_acceleration, earth_pressure, heun_friction_budget,
                       momentum_rate, net_acceleration, wave_speed_absolute, wave_speed_relative)
+from .kernels import gauss_gradw_e, kernel_norm
 from .sph import F_H, F_ND, F_U, F_V, F_V0, deposit_gradient, deposit_to_grid, evaluate_into
 
 # status codes returned by ``advance``
@@ -78,6 +79,8 @@ class StepParams(NamedTuple):
     dt_relative: bool             # time_step 'relative' (path) instead of eq 32
     geometry_step: float          # |u| Δt ≤ CFL · geometry_step (m) with dt_relative
     front_threshold: float        # arrival-time depth threshold of the envelopes (m)
+    own_deposit: bool = True      # the bed term includes a particle's own deposit (False: excluded, ``own_trail``)
+    deposit_max_tan: float = math.inf  # no deposition where |tanθ| exceeds this (tan φ_B: a deposit cannot rest there)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -192,8 +195,9 @@ def time_step(u, V, h, du, L, p):
 
 @njit(cache=True)
 def drive_and_deposition(x, u, V, h, dh, du, gb, gs, gc, fc, k, tab, p, dt, a, fr, fdv):
-    """Stage 1: driving acceleration a (eqs 11/27), the deposited fraction fr (eqs 14, 34, 36) and
-    the predictor's Coulomb budget fdv = F Δt (+ the eq 12 loss)."""
+    """Stage 1: driving acceleration a (eqs 11/27), the deposited fraction fr (eqs 14, 34, 36; none
+    where the bed is steeper than ``deposit_max_tan``) and the predictor's Coulomb budget fdv = F Δt
+    (+ the eq 12 loss)."""
     ns = tab.shape[1]
     for i in range(x.shape[0]):
         fr[i] = 0.0
@@ -202,7 +206,7 @@ def drive_and_deposition(x, u, V, h, dh, du, gb, gs, gc, fc, k, tab, p, dt, a, f
             a[i] = 0.0
             continue
         a[i] = driving_acceleration(gs[i], k[i], gc[i], dh[i], gb[i])
-        if p.deposition and h[i] > 0.0:
+        if p.deposition and h[i] > 0.0 and abs(gs[i]) <= p.deposit_max_tan * gc[i]:
             dhu = momentum_rate(h[i], u[i], net_acceleration(a[i], u[i], fc[i]), du[i])
             kk, w = locate(x[i] + p.origin, p.ds, ns)
             huc = critical_momentum(x[i], p.L0, p.x_inf, table_at(tab, T_A, kk, w), table_at(tab, T_B, kk, w),
@@ -303,10 +307,95 @@ def deposit_with_width(dep, depb, binv, xp, dv, dxg):
         depb[k + 1] += (dv - a) * binv[k + 1]
 
 
+# ----------------------------------------------------------------------------------------------
+# a particle's own deposit (deposition.own_deposit: exclude; docs/da-engineer-scale.md)
+# ----------------------------------------------------------------------------------------------
+
+#: cells of its own deposit each particle remembers (ring buffer); older ones count as others' deposit
+OWN_SLOTS = 64
+#: a new deposit in one of the last OWN_MATCH slots' cells is added to that slot
+OWN_MATCH = 3
+
+
+def own_trail(n: int, enabled: bool = True) -> np.ndarray:
+    """The per-particle record of its own deposit, indexed by particle id: row [count, cells (K),
+    bed amounts (K)], K = ``OWN_SLOTS``; a (0, 0) array when the own deposit is not excluded."""
+    return np.zeros((n, 1 + 2 * OWN_SLOTS)) if enabled else np.zeros((0, 0))
+
+
+@njit(cache=True, inline="always")
+def own_add(own, pid, cell, amount):
+    """Book ``amount`` (the bed quantity put into grid cell ``cell``) as particle pid's own deposit."""
+    K = OWN_SLOTS
+    cnt = int(own[pid, 0])
+    for back in range(1, min(cnt, OWN_MATCH) + 1):
+        slot = (cnt - back) % K
+        if own[pid, 1 + slot] == cell:
+            own[pid, 1 + K + slot] += amount
+            return
+    slot = cnt % K
+    own[pid, 1 + slot] = cell
+    own[pid, 1 + K + slot] = amount
+    own[pid, 0] = cnt + 1
+
+
 @njit(cache=True)
-def commit(x, F, xn, un, fr, dep, depb, binv, p):
+def own_book(own, pid, xp, dv, binv, has_width, ng, dxg):
+    """The cells and amounts ``sph.deposit_to_grid`` / ``deposit_with_width`` put on the bed grid
+    for volume dv at xp, booked as pid's own deposit (same weights, so the exclusion is exact)."""
+    s = xp / dxg - 0.5
+    k = int(math.floor(s))
+    if k < 0:
+        own_add(own, pid, 0, dv * binv[0] if has_width else dv)
+    elif k >= ng - 1:
+        own_add(own, pid, ng - 1, dv * binv[ng - 1] if has_width else dv)
+    else:
+        a = dv * (1.0 - (s - k))
+        own_add(own, pid, k, a * binv[k] if has_width else a)
+        own_add(own, pid, k + 1, (dv - a) * binv[k + 1] if has_width else dv - a)
+
+
+@njit(cache=True)
+def exclude_own_deposit(x, V, order, own, dxg, L, qc, wall, gb):
+    """gb (= −∂h_D/∂s from ``sph.deposit_gradient``) without each particle's own deposit: adds back
+    Σ_own dep_k ∇W(x_i − x_k) over the remembered cells, mirrored at the wall like the full sum."""
+    K = OWN_SLOTS
+    norm = kernel_norm(L, qc)
+    qc2 = qc * qc
+    ec = math.exp(-qc2)
+    g2 = 2.0 * norm / (L * L)
+    radius = qc * L
+    for i in range(x.shape[0]):
+        if V[i] <= 0.0:
+            continue
+        pid = order[i]
+        cnt = int(own[pid, 0])
+        if cnt == 0:
+            continue
+        xi = x[i]
+        s = 0.0
+        for slot in range(min(cnt, K)):
+            amt = own[pid, 1 + K + slot]
+            if amt == 0.0:
+                continue
+            xc = (own[pid, 1 + slot] + 0.5) * dxg
+            r = xi - xc
+            q2 = (r / L) ** 2
+            if q2 < qc2:
+                s += gauss_gradw_e(amt * g2, r, math.exp(-q2), ec)
+            if wall and xi < radius:
+                r = xi + xc
+                q2 = (r / L) ** 2
+                if q2 < qc2:
+                    s += gauss_gradw_e(amt * g2, r, math.exp(-q2), ec)
+        gb[i] += s
+
+
+@njit(cache=True)
+def commit(x, F, xn, un, fr, dep, depb, binv, p, order, own):
     """x, u ← x^{n+1}, u^{n+1}; the deposited fraction of each particle's volume goes onto the grid
-    (all of it below min_volume_fraction of the initial volume: the particle stops). Returns max |u|."""
+    (all of it below min_volume_fraction of the initial volume: the particle stops), booked in
+    ``own`` (rows by particle id ``order[i]``) when the own deposit is excluded. Returns max |u|."""
     u = F[F_U]
     V = F[F_V]
     umax = 0.0
@@ -322,6 +411,8 @@ def commit(x, F, xn, un, fr, dep, depb, binv, p):
                 rest = 0.0
                 un[i] = 0.0
             V[i] = rest
+            if own.shape[0] > 0:
+                own_book(own, order[i], xn[i], dv, binv, p.has_width, dep.shape[0], p.dx_grid)
             if p.has_width:
                 deposit_with_width(dep, depb, binv, xn[i], dv, p.dx_grid)
             else:
@@ -337,19 +428,21 @@ def commit(x, F, xn, un, fr, dep, depb, binv, p):
 # ----------------------------------------------------------------------------------------------
 
 @njit(cache=True)
-def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps):
+def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps, own):
     """Step from t until t_target (exactly), rest, or a failure. Returns
     (t, nsteps, status, id of the offending particle or −1, L_s, Δt of the last step).
 
     x, F, order: sorted particle state (``sph.F_*`` rows); dep: deposited volume per grid cell;
     depb, binv: deposit / width and 1/width per cell (``p.has_width``; otherwise unused);
     env: (3, n_cells) envelopes or (3, 0); diag: lift-off diagnostics (3,); p: ``StepParams``;
-    tab: bed table (``path.N_TABLE`` rows over the stations)."""
+    tab: bed table (``path.N_TABLE`` rows over the stations); own: ``own_trail`` (each particle's
+    own deposit, excluded from its bed term) or a (0, 0) array."""
     n = x.shape[0]
     qc = p.kernel_support
     wall = p.back_wall
     bed = p.deposition and p.deposit_as_bed
     bed_dep = depb if p.has_width else dep
+    mine = bed and own.shape[0] > 0 and not p.own_deposit
     xe = np.empty(2 * n)
     ue = np.empty(2 * n)
     Ve = np.empty(2 * n)
@@ -377,6 +470,8 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         E = evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h1, nd1, dh1, du1, xs1, E)
         if bed:
             deposit_gradient(x, V, bed_dep, p.dx_grid, L, qc, wall, gb1)
+            if mine:
+                exclude_own_deposit(x, V, order, own, p.dx_grid, L, qc, wall, gb1)
         bed_terms(x, u, V, h1, dh1, du1, tab, p, gs1, gc1, fc1, k1, diag)
         store_depths(F, h1, nd1)
         dt = time_step(u, V, h1, du1, L, p)
@@ -391,13 +486,15 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         E = evaluate_into(xt, ut, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h2, nd2, dh2, du2, xs2, E)
         if bed:
             deposit_gradient(xt, V, bed_dep, p.dx_grid, L, qc, wall, gb2)
+            if mine:
+                exclude_own_deposit(xt, V, order, own, p.dx_grid, L, qc, wall, gb2)
         bed_terms(xt, ut, V, h2, dh2, du2, tab, p, gs2, gc2, fc2, k2, diag)
         status, i = corrector(x, u, V, a1, dh2, gb2, xs2, gs2, gc2, fc1, fc2, k2, fr, dt, p, xn, un)
         if status != RUNNING:
             return t, nsteps, status, order[i], L, dt
         t_new = t_target if last else t + dt
         mark_envelopes(env, x, xn, h1, un, V, t_new, p.dx_grid, p.front_threshold)
-        umax = commit(x, F, xn, un, fr, dep, depb, binv, p)
+        umax = commit(x, F, xn, un, fr, dep, depb, binv, p, order, own)
         t = t_new
         nsteps += 1
         if umax < p.u_rest:
