@@ -1,4 +1,6 @@
 """granudep summary: numbers come from the files; missing inputs give 'Not available' lines."""
+from pathlib import Path
+
 import pandas as pd
 import pytest
 
@@ -65,6 +67,41 @@ def test_cli_summary(inputs, tmp_path):
             "--verification", *map(str, inputs["verification"]), "--benchmarks", str(inputs["benchmarks"])]
     assert main(args) == 0
     assert "## Table 3" in out.read_text()
+
+
+CAPTIONS = Path(__file__).resolve().parents[2] / "workflow" / "report"
+
+
+def _figure_lines(text):
+    return [ln for ln in text.split("## Figures", 1)[1].splitlines() if ln.startswith("- [")]
+
+
+def test_summary_lists_every_figure_given_with_its_caption(tmp_path):
+    """Issue 27: the workflow passes every figure as NAME=PATH and the report's captions; each is listed
+    with a non-empty caption (before, the summary rule gave no figures and the section said 'not given')."""
+    names = sorted(p.stem for p in CAPTIONS.glob("*.rst"))
+    assert len(names) >= 17
+    figs = []
+    for n in names:
+        f = tmp_path / "figures" / f"{n}_drawn.png"
+        f.parent.mkdir(exist_ok=True)
+        f.write_bytes(b"\x89PNG" + b"0" * 3000)
+        figs.append(f"{n}={f}")
+    out = tmp_path / "summary.md"
+    assert main(["summary", "-o", str(out), "--figures", *figs, "--captions", str(CAPTIONS)]) == 0
+    lines = _figure_lines(out.read_text())
+    assert len(lines) == len(names)
+    for n, ln in zip(names, lines):
+        assert f"[{n}_drawn.png](figures/{n}_drawn.png) (3 kB): " in ln
+        caption = ln.split("): ", 1)[1]
+        assert len(caption) > 20 and "no caption" not in caption and "**" not in caption and "{{" not in caption
+    assert any("Fig 5 – free surface of T22-A70" in ln for ln in lines)
+
+
+def test_summary_names_a_figure_without_caption_or_file(tmp_path):
+    text = build_summary(figures=[f"fig99={tmp_path / 'fig99.png'}"], captions=CAPTIONS, output=tmp_path / "s.md")
+    (line,) = _figure_lines(text)
+    assert "**missing**" in line and "no caption (`fig99.rst` not found)" in line
 
 
 def test_md_table_escapes_and_formats():

@@ -76,6 +76,8 @@ def dry_run_args(item) -> list[tuple[str, ...]]:
     return {
         "test_default_config_schedules_the_whole_paper": lambda: [("-j2",)],
         "test_ci_profile_runs_the_whole_chain_small": lambda: [("--profile", "profiles/ci")],
+        "test_summary_is_given_every_figure_with_its_caption": lambda: [("-j2",)],
+        "test_converged_reference_is_the_ladders_converged_rung": lambda: [("-j2",)],
         "test_single_targets_run_only_what_they_need": lambda: [("-j2", p["target"])],
         "test_slurm_profile_dry_runs": lambda: [("--profile", "profiles/slurm")],
         "test_extra_study_targets_dry_run": lambda: [("-j2", p["target"])],
@@ -121,6 +123,33 @@ def test_default_config_schedules_the_whole_paper(workdir):
     assert jobs["da_reading"] == 8 and jobs["reference_converged"] == 1 and jobs["regress_diagnose"] == 1
     # every numba rule sets its own thread count
     assert re.search(r"NUMBA_NUM_THREADS=1 granudep isph T22-A70 ", out)
+
+
+def test_summary_is_given_every_figure_with_its_caption(workdir):
+    """Issue 27: `snakemake -j2` made 17 figures and a summary saying "figures (not given)": the summary
+    rule must pass every figure the run draws as NAME=PATH, NAME having its caption workflow/report/NAME.rst."""
+    rc, out, jobs = dry_run(workdir, "-j2")
+    assert rc == 0, out
+    drawn = set(re.findall(r"^\s*output: (results/figures/\S+\.png)", out, flags=re.M))
+    assert len(drawn) >= 17
+    (cmd,) = [ln for ln in out.splitlines() if ln.startswith("Shell command: granudep summary ")]
+    assert "--captions workflow/report" in cmd
+    given = dict(tok.split("=", 1)[::-1] for tok in cmd.split("--figures", 1)[1].split(" --")[0].split())
+    assert set(given) == drawn
+    from granudep.report.summary import figure_caption
+    for path, name in given.items():
+        assert figure_caption(name, workdir / "workflow" / "report"), f"{path}: no caption {name}.rst"
+
+
+def test_converged_reference_is_the_ladders_converged_rung(workdir):
+    """Issue 27: the converged reference is chosen on the ladder's tolerance (compare.reference), the
+    workflow's runs first (the fall-back), the ladder's files after --ladder."""
+    rc, out, jobs = dry_run(workdir, "-j2")
+    assert rc == 0, out
+    (cmd,) = [ln for ln in out.splitlines() if "--label '2D converged'" in ln and ln.startswith("Shell command:")]
+    assert ("granudep reference results/isph/T22-A30.nc results/isph/T22-A45.nc results/isph/T22-A70.nc "
+            "results/isph/T22-A124.nc --ladder") in cmd
+    assert "--converged --tolerance 0.05 --measure v99" in cmd
 
 
 def test_ci_profile_runs_the_whole_chain_small(workdir):

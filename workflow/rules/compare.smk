@@ -1,9 +1,12 @@
 # DA runs against the 2D references (Section 4.3, Figs 15-16) and the reading matrix (issue 13).
 # Two 2D references, same front and flow-time rules as the DA runs:
 #   - paper resolution: the 2D ISPH runs of this workflow (isph.dx);
-#   - converged: per case the run at compare.reference.dx among those runs and the files matched by
-#     compare.reference.runs (e.g. the convergence ladder), or the finest one when dx is null;
-#     labelled with its dx.
+#   - converged: per case, among those runs and the files matched by compare.reference.runs (the
+#     convergence ladder, the reference runs), the finest rung whose runout (compare.reference.measure,
+#     the 1 % volume front) changed by at most compare.reference.tolerance (5 %) from the next coarser
+#     rung (select: converged, the default); without one the workflow's run, and the row says so
+#     (column reference_basis). select: finest takes the finest run on disk; a number in
+#     compare.reference.dx takes the run at that dx. Labelled with its dx, row by row.
 # Reading matrix: DA runs with deposition for every A, B reading in compare.readings (computed,
 # paper normalised, paper dimensional), each against the no-deposition run and both references.
 # Plus any CSV listed in config `reference_tables` (e.g. a user's measurements).
@@ -17,9 +20,15 @@ READINGS = list(_CMP.get("readings", ["computed", "paper", "paper-dimensional"])
 DEFAULT_READING = config["da"]["ab_source"]
 REFERENCE_DX = _REF.get("dx")
 REFERENCE_EXTRA = sorted({p for pat in _REF.get("runs", []) for p in _glob.glob(pat)})
+REFERENCE_SELECT = "dx" if REFERENCE_DX is not None else _REF.get("select", "converged")
+REFERENCE_TOL = float(_REF.get("tolerance", 0.05))
+REFERENCE_MEASURE = _REF.get("measure", "v99")
 # the paper's resolution is dx = 4 mm (Appendix); a coarser workflow (CI) says so in its label
 PAPER_REFERENCE_LABEL = "2D paper resolution" if abs(config["isph"]["dx"] - 0.004) < 1e-9 else "2D workflow resolution"
-CONVERGED_REFERENCE_LABEL = "2D converged" if REFERENCE_DX is not None else "2D finest available"
+CONVERGED_REFERENCE_LABEL = {"dx": "2D converged", "converged": "2D converged",
+                             "finest": "2D finest available"}[REFERENCE_SELECT]
+REFERENCE_OPTIONS = {"dx": f"--dx {REFERENCE_DX}", "finest": "--finest",
+                     "converged": f"--converged --tolerance {REFERENCE_TOL} --measure {REFERENCE_MEASURE}"}[REFERENCE_SELECT]
 
 
 def reading_file(case, reading):
@@ -97,7 +106,8 @@ rule reference:
 
 
 rule reference_converged:
-    """The converged (or finest available) 2D reference, one run per case, labelled with its dx."""
+    """The converged 2D reference (compare.reference), one run per case, each row labelled with its dx
+    and why it was chosen (reference_basis)."""
     input:
         runs=[f"{RESULTS}/isph/{REFERENCE_2D[c]}.nc" for c in DA_CASES],
         extra=REFERENCE_EXTRA,
@@ -105,7 +115,7 @@ rule reference_converged:
         f"{RESULTS}/compare/reference_converged.csv",
     params:
         label=CONVERGED_REFERENCE_LABEL,
-        select="--finest" if REFERENCE_DX is None else f"--dx {REFERENCE_DX}",
+        select=REFERENCE_OPTIONS,
     log:
         f"{LOGS}/compare/reference_converged.log",
     benchmark:
@@ -115,7 +125,7 @@ rule reference_converged:
         runtime=10,
         mem_mb=2000,
     shell:
-        "granudep reference {input.runs} {input.extra} {params.select} --label '{params.label}'"
+        "granudep reference {input.runs} --ladder {input.extra} {params.select} --label '{params.label}'"
         " -o {output} > {log} 2>&1"
 
 
@@ -145,8 +155,8 @@ rule compare:
 
 
 # Regression on the converged reference (claims scorecard, column "ours converged"): the runs of
-# compare.reference that `granudep reference` selects (per case the run at compare.reference.dx, or
-# the finest) and that are finer than this workflow's own run get monitoring sections and the eq-36
+# compare.reference that `granudep reference` selects (per case the finest converged rung, the run at
+# compare.reference.dx, or the finest) and that are not this workflow's own run get monitoring sections and the eq-36
 # regression, so Table 3 / Table 5 entries of those cases are also read at that resolution.
 def _converged_runs():
     if not REFERENCE_EXTRA:
@@ -154,7 +164,11 @@ def _converged_runs():
     from granudep.report.da_vs_reference import select_reference_runs
     own = [f"{RESULTS}/isph/{REFERENCE_2D[c]}.nc" for c in DA_CASES]
     have = [p for p in own if os.path.exists(p)]
-    chosen = select_reference_runs(REFERENCE_EXTRA + have, REFERENCE_DX)
+    if REFERENCE_SELECT == "converged":
+        from granudep.report.da_vs_reference import select_converged_runs
+        chosen = [p for p, _, ok in select_converged_runs(have, REFERENCE_EXTRA, REFERENCE_TOL, REFERENCE_MEASURE) if ok]
+    else:
+        chosen = select_reference_runs(REFERENCE_EXTRA + have, REFERENCE_DX)
     return {os.path.splitext(os.path.basename(p))[0]: p for p in chosen if p in REFERENCE_EXTRA}
 
 

@@ -1,5 +1,24 @@
 # results/summary.md: the paper-vs-ours tables (Table 3, Table 5 A/B, Fig 16 errors) and the
-# verification results, all read from the outputs; then the per-rule benchmark table.
+# verification results, all read from the outputs; then the per-rule benchmark table and every
+# figure with its caption (the report's, workflow/report/NAME.rst).
+
+# every figure of `all` as NAME=PATH (NAME: its caption workflow/report/NAME.rst), then the studies'
+SUMMARY_FIGURES = (
+    {n: figure_path(n) for n in ACTIVE_FIGURES}
+    | EXTRA_FIGURES
+    | {f"path_{c}": f"{RESULTS}/figures/path_{c}.png" for c in PATH_CASES}
+)
+STUDY_FIGURES = {"convergence": f"{RESULTS}/figures/convergence.png",
+                 "sensitivity": f"{RESULTS}/figures/sensitivity.png"}
+CAPTIONS_DIR = os.path.join(os.path.dirname(os.path.abspath(workflow.main_snakefile)), "workflow", "report")
+
+
+def _summary_figure_args(wc, input):
+    """--figures NAME=PATH for every figure given to the summary (the studies' only when on disk)."""
+    named = [(n, p) for n, p in SUMMARY_FIGURES.items()] + [(n, p) for n, p in STUDY_FIGURES.items()
+                                                           if p in input.studies]
+    # path figures share one caption (path.rst)
+    return " ".join(f"{'path' if n.startswith('path_') else n}={p}" for n, p in named)
 
 
 rule summary:
@@ -13,7 +32,7 @@ rule summary:
         extra_figures=list(EXTRA_FIGURES.values()),
         converged_regression=[f"{CONVERGED_REGRESSION}/table3_comparison.csv"] if CONVERGED_RUNS else [],
         verification=[f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"],
-        figures=[figure_path(n) for n in ACTIVE_FIGURES],
+        figures=list(SUMMARY_FIGURES.values()),
         # the studies beyond the paper are separate targets: their sections are filled when their
         # outputs exist (a later `snakemake` reruns the summary when they are newer), else the
         # summary says "not available" and names the target
@@ -37,6 +56,8 @@ rule summary:
         sensitivity=f"{RESULTS}/sensitivity/sensitivity.csv",
         results=RESULTS,
         converged=f"--converged-regression {CONVERGED_REGRESSION}" if CONVERGED_RUNS else "",
+        figures=_summary_figure_args,
+        captions=os.path.relpath(CAPTIONS_DIR),
     log:
         f"{LOGS}/summary.log",
     benchmark:
@@ -52,7 +73,7 @@ rule summary:
         " --convergence-n {params.convergence_n} --sensitivity {params.sensitivity}"
         " --caption-numbers {output.captions} --results {params.results}"
         " --matrix {input.matrix} --maxima {input.maxima} --diagnosis {input.diagnosis} --claims {output.claims}"
-        " {params.converged}"
+        " {params.converged} --figures {params.figures} --captions {params.captions}"
         " > {log} 2>&1"
 
 

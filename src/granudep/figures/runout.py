@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from .. import cases
-from ..report.da_vs_reference import load_reference, match_table5
+from ..report.da_vs_reference import READINGS, da_reading, load_reference, match_table5
 from ..config import ConfigError
 from .common import (add_inputs, case_of, classify, front_note, hide_unused, load, load_table, need, new_figure,
                      note, panel_label, register)
@@ -91,9 +91,8 @@ def fig15(da_runs, reference_runs=(), reference_tables=(), flow_time_tol: float 
             ok = np.isfinite(r)
             env = r.copy()
             env[ok] = np.maximum.accumulate(r[ok])
-            reading = str(ds.attrs.get("ab_source", "")).split(" ")[0] if int(ds.attrs["deposition"]) else ""
-            units = str(ds.attrs.get("coefficient_units", "")) if reading else ""
-            lab = st["label"] + (f" (A, B {reading}{', dimensional' if units == 'dimensional' else ''})" if reading else "")
+            reading = da_reading(ds) if int(ds.attrs["deposition"]) else ""  # plain label, as in comparison.csv
+            lab = st["label"] + (f" (A, B: {READINGS.get(reading, reading)})" if reading else "")
             ax.plot(ds["time"].values, env / L0, color=st["color"], ls=st["ls"], lw=1.5, label=lab)
             ax.axvline(float(ds["flow_time"].values), color=st["color"], lw=0.8, ls=":")
         if tables is not None:
@@ -150,13 +149,19 @@ def fig16(compare_table):
                         continue
                     ax.bar(x, float(rows[ref_q].iloc[0]), width, color="0.75", edgecolor="k",
                            hatch=hatch_ref[provs.index(key) % 4], label=f"reference: {key}"[:70] if ci == 0 else None)
+                    rdx = float(rows["reference_dx"].iloc[0]) if "reference_dx" in rows else math.nan
+                    if math.isfinite(rdx):  # each reference bar says its dx (the converged one varies by case)
+                        ax.text(x, 0, f"{1e3 * rdx:g} mm", ha="center", va="bottom", fontsize=5, rotation=90)
                 else:
                     rows = g[g["deposition"] == key]
                     if rows.empty:
                         continue
                     st = DA_STYLE[key]
                     val = float(rows[q].iloc[0])
-                    ax.bar(x, val, width, color=st["color"], alpha=0.85, label=st["label"] if ci == 0 else None)
+                    lab = st["label"]
+                    if key and "reading_label" in rows and isinstance(rows["reading_label"].iloc[0], str):
+                        lab += f" (A, B: {rows['reading_label'].iloc[0]})"
+                    ax.bar(x, val, width, color=st["color"], alpha=0.85, label=lab if ci == 0 else None)
                     errs = [f"{100 * float(e):+.0f}%" for e in rows[err_q] if np.isfinite(float(e))]
                     ax.text(x, val, "\n".join(errs), ha="center", va="bottom", fontsize=7, color=st["color"])
         ax.set_xticks(range(len(case_list)), case_list)
@@ -230,7 +235,7 @@ def reading_matrix_figure(matrix):
     measures = list(dict.fromkeys(t["measure"]))
     cols = list(dict.fromkeys(zip(t["case"], t["reference"])))
     readings = list(dict.fromkeys(t["reading"]))
-    rows = ["no deposition"] + readings
+    rows = ["no deposition"] + [READINGS.get(rd, rd) for rd in readings]  # plain labels (reading_label)
     fig, axes = new_figure(len(measures), 2, panel=(1.2 + 1.25 * len(cols), 0.9 + 0.45 * len(rows)))
     from matplotlib import colormaps
     cmap = colormaps["RdBu_r"]
@@ -260,7 +265,7 @@ def reading_matrix_figure(matrix):
             panel_label(ax, 2 * i + j, f"{q.replace('_', ' ')} error (%), front {m}")
             fig.colorbar(im, ax=ax, shrink=0.8, label="(DA − 2D)/2D (%)")
     note(fig, "Rows: DA without deposition, and with deposition for each A, B reading (computed: our regression; "
-              "paper: Table 5 normalised; paper-dimensional: Table 5 as m²/s). Columns: case and 2D reference "
+              "paper normalised: Table 5 as printed; paper dimensional: Table 5 as m²/s). Columns: case and 2D reference "
               "(labelled with its dx). Front 2d: attached front at 2 grain diameters; v99: 1 % volume front; the "
               "same rule on both models' depth profiles. " + NO_FARIN + ".")
     return fig

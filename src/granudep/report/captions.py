@@ -120,7 +120,7 @@ def caption_numbers(results, convergence_dx=None) -> dict:
     if mxm is not None and len(mxm):
         sel = mxm[mxm["measure"] == "2d"] if "measure" in mxm else mxm
         nums["readingmatrix"] = "; ".join(
-            f"{r.reading} vs {r.reference}: largest runout error {100 * r.max_runout_error_nodep:.0f} % without, "
+            f"{getattr(r, 'reading_label', r.reading)} vs {r.reference}: largest runout error {100 * r.max_runout_error_nodep:.0f} % without, "
             f"{100 * r.max_runout_error_dep:.0f} % with deposition; flow time {100 * r.max_flow_time_error_nodep:.0f} % "
             f"/ {100 * r.max_flow_time_error_dep:.0f} %" for r in sel.itertuples())
     else:

@@ -10,11 +10,17 @@ from . import readme_status, sensitivity_table
 def _cmd_reference(args) -> int:
     from .da_vs_reference import reference_from_isph, select_reference_runs
     from ..io import write_text
-    runs = args.runs
-    if args.finest or args.dx is not None:
-        runs = select_reference_runs(runs, args.dx)
+    runs, basis = list(args.runs), None
+    if args.converged:
+        from .da_vs_reference import select_converged_runs
+        picked = select_converged_runs(runs, args.ladder or [], tol=args.tolerance, measure=args.measure)
+        runs, basis = [p for p, _, _ in picked], [(b, c) for _, b, c in picked]
+        for p, b, _ in picked:
+            LOG.info("reference %s: %s (%s)", args.label or "", p, b)
+    elif args.finest or args.dx is not None:
+        runs = select_reference_runs(runs + list(args.ladder or []), args.dx)
         LOG.info("reference %s: %s", args.label or "", ", ".join(str(r) for r in runs))
-    table = reference_from_isph(runs, tol=args.flow_time_tol, label=args.label)
+    table = reference_from_isph(runs, tol=args.flow_time_tol, label=args.label, basis=basis)
     with __import__("pandas").option_context("display.width", 200, "display.max_colwidth", 70):
         print(table.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     write_text(table.to_csv(index=False), args.output)
@@ -55,7 +61,8 @@ def _cmd_summary(args) -> int:
                          benchmarks=args.benchmarks, figures=args.figures, output=args.output,
                          convergence=args.convergence, sensitivity=args.sensitivity,
                          convergence_dx=args.convergence_dx, convergence_n=args.convergence_n,
-                         matrix=args.matrix, maxima=args.maxima, claims=card, diagnosis=args.diagnosis)
+                         matrix=args.matrix, maxima=args.maxima, claims=card, diagnosis=args.diagnosis,
+                         captions=args.captions)
     write_text(text, args.output)
     LOG.info("summary written to %s", args.output)
     if args.html:
@@ -93,6 +100,16 @@ def register(sub) -> None:
                    help="keep one run per case: the finest dx (the converged reference until the ladder names one)")
     p.add_argument("--dx", type=_positive_float, metavar="M",
                    help="keep one run per case: the one at this dx (m; finest where none)")
+    p.add_argument("--converged", action="store_true",
+                   help="keep one run per case: the finest rung of the ladder (RUNS and --ladder) whose runout "
+                        "changed by at most --tolerance from the next coarser rung; else the case's run in RUNS "
+                        "(column reference_basis says which and why)")
+    p.add_argument("--ladder", nargs="*", metavar="ISPH.nc",
+                   help="further runs of the same cases at other dx (e.g. results/convergence/isph/*.nc)")
+    p.add_argument("--tolerance", type=_positive_float, default=0.05, metavar="REL",
+                   help="--converged: largest relative runout change from the next coarser rung (default 0.05)")
+    p.add_argument("--measure", choices=("v99", "2d", "5mm", "tail"), default="v99",
+                   help="--converged: the runout front the ladder checks (default v99, the 1 %% volume front)")
     p.set_defaults(func=_cmd_reference)
 
     p = sub.add_parser("compare", help="relative errors of DA runs against reference tables (Fig 16)")
@@ -131,7 +148,9 @@ def register(sub) -> None:
     p.add_argument("--diagnosis", metavar="CSV", help="regression diagnosis table (granudep regress-diagnose)")
     p.add_argument("--verification", nargs="*", metavar="CSV", help="granudep verify outputs")
     p.add_argument("--benchmarks", metavar="CSV|DIR", help="benchmark CSV, or a folder of Snakemake benchmark .tsv files")
-    p.add_argument("--figures", metavar="DIR", help="folder of figure files to list")
+    p.add_argument("--figures", nargs="+", metavar="NAME=PATH",
+                   help="the figures to list, each NAME=PATH (NAME: its caption file NAME.rst) or PATH, or a folder")
+    p.add_argument("--captions", metavar="DIR", help="folder of the figure captions NAME.rst (workflow/report)")
     p.set_defaults(func=_cmd_summary)
     sensitivity_table.register(sub)
     readme_status.register(sub)

@@ -51,7 +51,7 @@ MAIN_MEASURES = ("2d", "v99")
 
 REFERENCE_COLUMNS = ("case", "a", "theta_deg", "final_runout_norm", "flow_time", "flow_time_norm",
                      "front_definition", "provenance", "note", "dx", "time_to_rest",
-                     *[f"final_runout_norm_{m}" for m in MEASURES], "flow_time_v99", "path")
+                     *[f"final_runout_norm_{m}" for m in MEASURES], "flow_time_v99", "path", "reference_basis")
 #: default flow-time tolerance (m), the shared definition's default (docs/paper-notes.md)
 FLOW_TIME_TOL = 1e-3
 
@@ -161,18 +161,31 @@ def _dx_label(dxs) -> str:
     return "dx not recorded" if not vals else "dx = " + " / ".join(f"{v:g}" for v in vals) + " mm"
 
 
-def reference_from_isph(runs: Iterable, tol: float = FLOW_TIME_TOL, label: str | None = None) -> pd.DataFrame:
+def reference_from_isph(runs: Iterable, tol: float = FLOW_TIME_TOL, label: str | None = None,
+                        basis: Iterable[tuple[str, bool]] | None = None) -> pd.DataFrame:
     """Reference table (:data:`REFERENCE_COLUMNS`) from 2D ISPH runs.
 
     ``label`` names the reference source (e.g. "2D paper resolution"); the table's ``reference``
     column is then the label with the runs' dx ("2D paper resolution (dx = 4 mm)"), so every number
-    read against it is labelled with its resolution.
+    read against it is labelled with its resolution. ``basis`` (one ``(sentence, converged)`` per run,
+    from :func:`select_converged_runs`) fills the per-row ``reference_basis`` and qualifies the label:
+    "LABEL where available" when only some cases have a converged run, "LABEL not available: workflow
+    run" when none has.
     """
     rows = [reference_row(r, tol) for r in runs]
     if not rows:
         raise ConfigError("reference: no ISPH run given")
     table = pd.DataFrame(rows, columns=list(REFERENCE_COLUMNS))
+    conv = None
+    if basis is not None:
+        basis = list(basis)
+        table["reference_basis"] = [b for b, _ in basis]
+        conv = [c for _, c in basis]
     if label:
+        if conv is not None and not any(conv):
+            label = f"{label} not available: workflow run"
+        elif conv is not None and not all(conv):
+            label = f"{label} where available"
         table["reference"] = f"{label} ({_dx_label(table['dx'])})"
     return table
 
@@ -209,6 +222,89 @@ def select_reference_runs(runs: Iterable, dx: float | None = None) -> list:
     return chosen
 
 
+#: the ladder's tolerance (issue 11): a rung is converged when its runout changed by at most 5 % from
+#: the next coarser rung (README, "T22-A70 on the resolution ladder")
+CONVERGENCE_TOL = 0.05
+#: the runout measure the ladder checks: the 1 % volume front (``monitor.x_inf_front: v99``); the
+#: 2 grain-diameter front where a file has no volume front
+CONVERGENCE_MEASURE = "v99"
+
+
+def _ladder_runout(row: dict, measure: str) -> float:
+    v = float(row.get(f"final_runout_norm_{measure}", math.nan)) if measure != "2d" else math.nan
+    return v if math.isfinite(v) else float(row["final_runout_norm"])
+
+
+def select_converged_runs(workflow_runs: Iterable, ladder_runs: Iterable = (), tol: float = CONVERGENCE_TOL,
+                          measure: str = CONVERGENCE_MEASURE) -> list[tuple[object, str, bool]]:
+    """Per Table 5 case, the finest *converged* 2D run; else the workflow's own run.
+
+    The rule (docs: README "DA vs 2D"): the runs of a case (``workflow_runs`` and ``ladder_runs``, failed
+    runs skipped) form a ladder of distinct dx (one run per dx, the workflow's own first). Rung k is
+    *converged* when its final runout ΔL/L0 (``measure``: the 1 % volume front, the 2 d front where the
+    file lacks it) differs from that of the next coarser rung by at most ``tol`` relative to rung k.
+    The reference is the finest converged rung. Without one (a fresh clone has no ladder run; or no step
+    is within ``tol``) the case keeps its workflow run (the finest run where it has none), and the
+    reason says so.
+
+    Returns ``(run, basis, converged)`` per case: ``basis`` is the sentence every row read against the
+    run carries (dx, the change and the tolerance, or why it fell back).
+    """
+    workflow_runs = list(workflow_runs)
+    by_case: dict[str, list] = {}
+    for i, r in enumerate([*workflow_runs, *ladder_runs]):
+        if isinstance(r, xr.Dataset):
+            ds, name = r, str(r.attrs.get("case", "dataset"))
+        else:  # lazily: a fine rung's particle records are never read (only the fronts and attributes)
+            if not Path(r).exists():
+                raise ConfigError(f"input: file {str(r)!r} does not exist")
+            ds, name = open_dataset(r, load=False), Path(r).name
+        try:
+            if str(ds.attrs.get("status", "ok")).lower().startswith("failed"):
+                LOG.warning("reference %s: failed run skipped", name)
+                continue
+            row = reference_row(ds)
+            dx = float(ds.attrs.get("dx", math.nan))
+        finally:
+            if not isinstance(r, xr.Dataset):
+                ds.close()
+        by_case.setdefault(row["case"], []).append({"run": r, "dx": dx, "runout": _ladder_runout(row, measure),
+                                                    "own": i < len(workflow_runs)})
+    out = []
+    for case, items in sorted(by_case.items()):
+        rungs: list[dict] = []
+        for it in sorted(items, key=lambda t: (-t["dx"] if math.isfinite(t["dx"]) else math.inf, not t["own"])):
+            if rungs and math.isfinite(it["dx"]) and math.isclose(it["dx"], rungs[-1]["dx"], rel_tol=1e-6):
+                continue  # the same rung twice (the ladder's 4 mm run beside the workflow's): keep the first
+            rungs.append(it)
+        rungs = [r for r in rungs if math.isfinite(r["dx"])] or rungs
+        pick, basis = None, ""
+        for k in range(len(rungs) - 1, 0, -1):
+            fine, coarse = rungs[k], rungs[k - 1]
+            change = (fine["runout"] - coarse["runout"]) / abs(fine["runout"]) if fine["runout"] else math.nan
+            if math.isfinite(change) and abs(change) <= tol:
+                pick = fine
+                basis = (f"converged: dx = {1e3 * fine['dx']:g} mm, runout ({measure} front) {100 * change:+.1f} % "
+                         f"on dx = {1e3 * coarse['dx']:g} mm (tolerance {100 * tol:g} %)")
+                break
+        if pick is not None:
+            out.append((pick["run"], basis, True))
+            continue
+        own_rungs = [r for r in rungs if r["own"]]
+        fall = own_rungs[0] if own_rungs else rungs[-1]
+        which = "workflow run" if own_rungs else "finest run"
+        if len(rungs) < 2:
+            why = "no finer run on disk (`snakemake -j2 convergence` / `reference_runs`)"
+        else:
+            steps = ", ".join(f"{1e3 * rungs[k]['dx']:g} mm {100 * (rungs[k]['runout'] - rungs[k - 1]['runout']) / abs(rungs[k]['runout']):+.1f} %"
+                              for k in range(1, len(rungs)) if rungs[k]["runout"])
+            why = f"no rung within {100 * tol:g} % of the next coarser ({steps})"
+        out.append((fall["run"], f"no converged run: {which} dx = {1e3 * fall['dx']:g} mm; {why}", False))
+    if not out:
+        raise ConfigError("reference: no usable ISPH run given")
+    return out
+
+
 def load_reference(table, name: str | None = None) -> pd.DataFrame:
     """Read and check a reference table (path or DataFrame).
 
@@ -237,6 +333,8 @@ def load_reference(table, name: str | None = None) -> pd.DataFrame:
         if col not in df.columns:
             df[col] = np.nan if col != "front_definition" else "not stated"
     df["case"] = df["case"].astype(str)
+    df["reference_basis"] = (df["reference_basis"].astype(object).where(df["reference_basis"].notna(), "").astype(str)
+                             if "reference_basis" in df.columns else "")
     return df
 
 
@@ -274,6 +372,7 @@ def da_summary(run) -> dict:
     out["a"] = float(ds.attrs["H0"]) / float(ds.attrs["L0"]) if {"H0", "L0"} <= set(ds.attrs) else float("nan")
     out["da_front_definition"] = front_definition(ds.attrs.get("front_depth_threshold"))
     out["reading"] = da_reading(ds)
+    out["reading_label"] = READINGS.get(out["reading"], out["reading"])
     out["A"] = float(ds.attrs.get("A", math.nan)) if dep else float("nan")
     out["B"] = float(ds.attrs.get("B", math.nan)) if dep else float("nan")
     out["x_inf_warning"] = str(ds.attrs.get("x_inf_warning", "")) if dep else ""
@@ -285,9 +384,11 @@ def da_summary(run) -> dict:
 
 
 #: the A, B readings of the reading matrix (issue 13), by name
-READINGS = {"computed": "computed A, B (normalised)", "paper": "paper A, B normalised",
-            "paper-dimensional": "paper A, B dimensional", "computed-dimensional": "computed A, B dimensional",
-            "none": "no deposition"}
+#: plain labels (column ``reading_label`` of comparison.csv and the reading matrix, the summary, the figures)
+#: (computed: our regression, normalised, eq 36; paper normalised: Table 5 as printed; paper dimensional:
+#: Table 5 read as (hu)_C = A[x] + B in m²/s)
+READINGS = {"computed": "computed", "paper": "paper normalised", "paper-dimensional": "paper dimensional",
+            "computed-dimensional": "computed dimensional", "none": "no deposition"}
 
 
 def da_reading(ds: xr.Dataset) -> str:
@@ -299,8 +400,8 @@ def da_reading(ds: xr.Dataset) -> str:
     return src if units == "normalised" else f"{src}-dimensional"
 
 
-COMPARE_COLUMNS = ("case", "a", "variant", "deposition", "reading", "A", "B", "reference", "provenance",
-                   "reference_dx", "final_runout_norm",
+COMPARE_COLUMNS = ("case", "a", "variant", "deposition", "reading", "reading_label", "A", "B", "reference",
+                   "provenance", "reference_dx", "reference_basis", "final_runout_norm",
                    "reference_final_runout_norm", "runout_rel_error", "flow_time", "reference_flow_time",
                    "flow_time_norm", "reference_flow_time_norm", "flow_time_rel_error", "flow_time_basis",
                    *[c for m in MEASURES for c in (f"final_runout_norm_{m}", f"reference_final_runout_norm_{m}",
@@ -326,6 +427,7 @@ def compare(da_runs: Iterable, references: Iterable) -> pd.DataFrame:
         match = ref[ref["case"] == d["case"]]
         if match.empty:
             rows.append({**d, "reference": "no reference", "provenance": "no reference", "reference_dx": np.nan,
+                         "reference_basis": "",
                          "reference_final_runout_norm": np.nan,
                          "runout_rel_error": np.nan, "reference_flow_time": np.nan,
                          "reference_flow_time_norm": np.nan, "flow_time_rel_error": np.nan,
@@ -346,7 +448,7 @@ def compare(da_runs: Iterable, references: Iterable) -> pd.DataFrame:
             robust["reference_flow_time_v99"] = rv99
             robust["flow_time_v99_rel_error"] = _rel(d["flow_time_v99"], rv99)
             rows.append({**d, **robust, "reference": str(r["reference"]), "provenance": str(r["provenance"]),
-                         "reference_dx": float(r.get("dx", np.nan)),
+                         "reference_dx": float(r.get("dx", np.nan)), "reference_basis": str(r["reference_basis"]),
                          "reference_final_runout_norm": float(r["final_runout_norm"]),
                          "runout_rel_error": _rel(d["final_runout_norm"], float(r["final_runout_norm"])),
                          "reference_flow_time": rft, "reference_flow_time_norm": rftn,
@@ -407,7 +509,7 @@ def max_errors(table: pd.DataFrame) -> pd.DataFrame:
                                        "signed_error", "case", "a", "paper_max_error", "paper_case_a"])
 
 
-MATRIX_COLUMNS = ["case", "a", "reference", "reference_dx", "reading", "reading_label", "A", "B", "measure",
+MATRIX_COLUMNS = ["case", "a", "reference", "reference_dx", "reference_basis", "reading", "reading_label", "A", "B", "measure",
                   "final_runout_norm", "final_runout_norm_nodep", "reference_final_runout_norm",
                   "runout_error", "runout_error_nodep", "runout_improved",
                   "flow_time", "flow_time_nodep", "reference_flow_time",
@@ -442,6 +544,7 @@ def reading_matrix(table: pd.DataFrame, measures: Iterable[str] = MAIN_MEASURES)
                 def get(row, c):
                     return float(row[c]) if row is not None and c in row.index else float("nan")
                 row = {"case": case, "a": float(r["a"]), "reference": ref, "reference_dx": get(r, "reference_dx"),
+                       "reference_basis": str(r.get("reference_basis", "") or ""),
                        "reading": reading, "reading_label": READINGS.get(reading, reading),
                        "A": get(r, "A"), "B": get(r, "B"), "measure": m,
                        "final_runout_norm": get(r, fr), "final_runout_norm_nodep": get(n, fr),

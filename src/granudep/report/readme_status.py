@@ -109,8 +109,23 @@ def _comparison(root: Path) -> list[str]:
         short = 100 * (nd.loc[both, "final_runout_norm"] - dep.loc[both, "final_runout_norm"]) / nd.loc[both, "final_runout_norm"]
         out.append(f"**DA vs {ref}**: runout error {_range(100 * nd['runout_rel_error'])} % without deposition, "
                    f"{_range(100 * dep['runout_rel_error'])} % with it; deposition shortens the DA runout by "
-                   f"{_range(short)} % ({len(both)} cases; the paper: up to 38 %).")
+                   f"{_range(short)} % ({len(both)} cases; the paper: up to 38 %)." + _reference_basis(g))
     return out
+
+
+def _reference_basis(g: pd.DataFrame) -> str:
+    """Which 2D run each case was read against and why (column reference_basis of comparison.csv, written
+    for the converged reference: its dx, the change from the next coarser dx, or the fall-back)."""
+    if "reference_basis" not in g:
+        return ""
+    per = g.sort_values("a").drop_duplicates("case")
+    per = per[per["reference_basis"].notna() & (per["reference_basis"].astype(str).str.strip() != "")]
+    if per.empty:
+        return ""
+    groups: dict[str, list[str]] = {}
+    for r in per.itertuples():
+        groups.setdefault(str(r.reference_basis), []).append(str(r.case))
+    return " Per case: " + "; ".join(f"{', '.join(c)}: {b}" for b, c in groups.items()) + "."
 
 
 def status_block(results: str | Path) -> str:

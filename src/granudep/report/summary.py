@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -74,7 +75,13 @@ def section_compare(compare) -> str:
     show = df.copy()
     for c in ("runout_rel_error", "flow_time_rel_error"):
         show[c] = pd.to_numeric(show[c], errors="coerce") * 100
-    out.append(md_table(show, {"case": ("case", ""), "variant": ("DA variant", ""), "reference": ("reference", ""),
+    if "reading_label" in show:  # the plain label of the A, B reading (the key where an old file lacks it)
+        show["reading_label"] = show["reading_label"].where(show["reading_label"].notna(), show.get("reading"))
+    if "reference_dx" in show:
+        show["reference_dx"] = pd.to_numeric(show["reference_dx"], errors="coerce") * 1e3
+    out.append(md_table(show, {"case": ("case", ""), "variant": ("DA variant", ""),
+                               "reading_label": ("A, B reading", ""), "reference": ("reference", ""),
+                               "reference_dx": ("ref. dx (mm)", ".3g"), "reference_basis": ("why this reference", ""),
                                "final_runout_norm": ("ΔL/L0 DA", ".3f"), "reference_final_runout_norm": ("ΔL/L0 ref.", ".3f"),
                                "runout_rel_error": ("runout error %", "+.1f"), "flow_time": ("t_F DA (s)", ".3f"),
                                "reference_flow_time": ("t_F ref. (s)", ".3f"), "flow_time_rel_error": ("flow-time error %", "+.1f"),
@@ -115,16 +122,20 @@ def section_reading_matrix(matrix, maxima) -> str:
     mt, mx = read_csv(matrix), read_csv(maxima)
     if mt is None or mx is None:
         return "\n".join(out) + not_available("reading matrix", matrix if mt is None else maxima)
-    out.append(f"Source: `{matrix}`, `{maxima}`. Readings: `computed` = our regression (normalised, eq 36), "
-               "`paper` = Table 5 read as normalised, `paper-dimensional` = Table 5 read as (hu)_C = A[x] + B in "
-               "m²/s. Each deposition run is paired with the same no-deposition run. Front `2d`: attached front "
+    out.append(f"Source: `{matrix}`, `{maxima}`. Readings (column `reading_label`; key `reading`): computed "
+               "(`computed`) = our regression (normalised, eq 36), paper normalised (`paper`) = Table 5 read as "
+               "normalised, paper dimensional (`paper-dimensional`) = Table 5 read as (hu)_C = A[x] + B in m²/s. Each deposition run is paired with the same no-deposition run. Front `2d`: attached front "
                "at 2 grain diameters (the paper's kind of front); `v99`: the point beyond which 1 % of the "
                "deposit's volume lies (does not jump when a thin tip detaches); the same rule on the 2D and the "
                "DA depth profile. Relative error = (DA − 2D)/2D.\n")
     show = mt.copy()
     for c in ("runout_error", "runout_error_nodep", "flow_time_error", "flow_time_error_nodep"):
         show[c] = pd.to_numeric(show[c], errors="coerce") * 100
-    out.append(md_table(show, {"case": ("case", ""), "reference": ("reference", ""), "reading": ("A, B reading", ""),
+    lab = "reading_label" if "reading_label" in show else "reading"
+    if "reference_dx" in show:
+        show["reference_dx"] = pd.to_numeric(show["reference_dx"], errors="coerce") * 1e3
+    out.append(md_table(show, {"case": ("case", ""), "reference": ("reference", ""),
+                               "reference_dx": ("ref. dx (mm)", ".3g"), lab: ("A, B reading", ""),
                                "measure": ("front", ""), "A": ("A", ".4f"), "B": ("B", ".4f"),
                                "runout_error_nodep": ("runout err. no dep. %", "+.1f"),
                                "runout_error": ("runout err. dep. %", "+.1f"), "runout_improved": ("improved", ""),
@@ -136,7 +147,8 @@ def section_reading_matrix(matrix, maxima) -> str:
     for c in [c for c in show.columns if c.startswith("max_") and "error" in c] + \
             ["runout_max_reduction", "flow_time_max_reduction"]:
         show[c] = pd.to_numeric(show[c], errors="coerce") * 100
-    out.append(md_table(show, {"reference": ("reference", ""), "reading": ("A, B reading", ""), "measure": ("front", ""),
+    lab = "reading_label" if "reading_label" in show else "reading"
+    out.append(md_table(show, {"reference": ("reference", ""), lab: ("A, B reading", ""), "measure": ("front", ""),
                                "max_runout_error_nodep": ("runout no dep. %", ".1f"),
                                "max_runout_error_dep": ("runout dep. %", ".1f"),
                                "runout_max_reduction": ("runout reduction (points)", "+.1f"),
@@ -149,7 +161,7 @@ def section_reading_matrix(matrix, maxima) -> str:
     out.append("\n**x∞ (self-consistent fixed point)**: "
                + ("every deposition run reached the fixed point within its tolerance.\n" if warn.empty else
                   "**WARNING** — the fall-back rule gave x∞ for: " + "; ".join(
-                      f"{r.case} ({r.reading}): {r.x_inf_warning}" for r in
+                      f"{r.case} ({getattr(r, 'reading_label', r.reading)}): {r.x_inf_warning}" for r in
                       warn.drop_duplicates(["case", "reading"]).itertuples()) + "\n"))
     return "\n".join(out)
 
@@ -257,16 +269,56 @@ def section_benchmarks(benchmarks) -> str:
     return "\n".join(out)
 
 
-def section_figures(figures, out_dir: Path | None) -> str:
+def figure_caption(name: str, captions) -> str:
+    """The caption of figure ``name`` (e.g. ``fig5``, ``reading-matrix``): the first paragraph of
+    ``captions/NAME.rst`` (the Snakemake report's caption, workflow/report/), markup removed; or the
+    entry of a mapping ``captions``. "" when there is none."""
+    if captions is None:
+        return ""
+    if isinstance(captions, dict):
+        return str(captions.get(name, "") or "")
+    path = Path(captions) / f"{name}.rst"
+    if not path.is_file():
+        return ""
+    first = path.read_text(encoding="utf-8").strip().split("\n\n", 1)[0]
+    text = " ".join(first.split()).replace("**", "").replace("``", "`")
+    return re.sub(r"\{\{.*?\}\}", "", text).strip()
+
+
+def _figure_entries(figures) -> list[tuple[str, Path]]:
+    """(name, path) of every figure given: a folder (every figure file in it, named by its stem), or a
+    list of ``NAME=PATH`` / ``PATH`` entries (a PATH alone is named by its stem)."""
+    if figures is None:
+        return []
+    if isinstance(figures, (str, Path)) and Path(figures).is_dir():
+        return [(f.stem, f) for f in sorted(Path(figures).iterdir()) if f.suffix.lower() in FIGURE_SUFFIXES]
+    items = [figures] if isinstance(figures, (str, Path)) else list(figures)
+    out = []
+    for item in items:
+        if Path(item).is_dir():
+            out += _figure_entries(item)
+            continue
+        name, sep, path = str(item).partition("=")
+        out.append((name, Path(path)) if sep else (Path(item).stem, Path(item)))
+    return out
+
+
+def section_figures(figures, out_dir: Path | None, captions=None) -> str:
+    """Every figure given (``--figures``: the workflow passes each figure as NAME=PATH), with its caption
+    (``--captions``: workflow/report, the report's captions)."""
     out = ["## Figures\n"]
-    if figures is None or not Path(figures).is_dir():
-        return "\n".join(out) + not_available("figures folder", figures)
-    files = sorted(f for f in Path(figures).iterdir() if f.suffix.lower() in FIGURE_SUFFIXES)
-    if not files:
+    entries = _figure_entries(figures)
+    if not entries:
+        if figures is None or (isinstance(figures, (str, Path)) and not Path(figures).exists()):
+            return "\n".join(out) + not_available("figures", figures)
         return "\n".join(out) + f"_Not available: no figure file in {figures}._\n"
-    for f in files:
+    out.append(f"{len(entries)} figures; captions from `{captions}` (the Snakemake report's).\n" if captions
+               else f"{len(entries)} figures.\n")
+    for name, f in entries:
         rel = os.path.relpath(f, out_dir) if out_dir is not None else str(f)
-        out.append(f"- [{f.name}]({rel}) ({f.stat().st_size / 1024:.0f} kB)")
+        size = f"{f.stat().st_size / 1024:.0f} kB" if f.is_file() else "**missing**"
+        cap = figure_caption(name, captions) or f"_no caption (`{name}.rst` not found)_"
+        out.append(f"- [{f.name}]({rel}) ({size}): {cap}")
     out.append("")
     return "\n".join(out)
 
@@ -274,7 +326,7 @@ def section_figures(figures, out_dir: Path | None) -> str:
 
 def build_summary(regression=None, compare=None, verification=(), benchmarks=None, figures=None,
                   output=None, convergence=None, sensitivity=None, convergence_dx=None,
-                  convergence_n=None, matrix=None, maxima=None, claims=None, diagnosis=None) -> str:
+                  convergence_n=None, matrix=None, maxima=None, claims=None, diagnosis=None, captions=None) -> str:
     """The Markdown summary text (see module docstring)."""
     out_dir = Path(output).parent if output is not None else None
     parts = [
@@ -296,6 +348,6 @@ def build_summary(regression=None, compare=None, verification=(), benchmarks=Non
         section_convergence(convergence, convergence_dx, convergence_n),
         section_sensitivity(sensitivity),
         section_benchmarks(benchmarks),
-        section_figures(figures, out_dir),
+        section_figures(figures, out_dir, captions),
     ]
     return "\n".join(parts)
