@@ -1,9 +1,12 @@
 """The converged 2D reference (issue 27): the finest ladder rung within the tolerance of the next coarser
 one, else the workflow's run, every row labelled with its dx and why; the A, B readings' plain labels."""
+import math
+
 import pandas as pd
 import pytest
 
 import synthetic_data as syn
+from granudep import cases
 from granudep.cli import main
 from granudep.io import var
 from granudep.report.da_vs_reference import compare, reading_matrix, reference_from_isph, select_converged_runs
@@ -19,6 +22,7 @@ def _run(path, dx, v99, case="T22-A70", L0=L0, H0=0.14, runout_2d=None):
     """A 2D run at ``dx`` whose 1 % volume front ends at ΔL/L0 = ``v99`` (2 d front: ``runout_2d``)."""
     ds = syn.isph_run(case, L0=L0, H0=H0, dx=0.02, runout=(runout_2d if runout_2d is not None else v99) * L0)
     ds.attrs["dx"] = dx  # a coarse lattice (small file) labelled with the rung's dx
+    ds.attrs["t_c"] = cases.characteristic_time(H0, math.radians(22.0))
     ds["final_front_v99"] = var(L0 * (1 + v99), (), "m", "1 % volume front, final")
     return syn.save(ds, path)
 
@@ -117,3 +121,22 @@ def test_cli_reference_compare_and_status_label_every_row_with_dx(ladder, tmp_pa
     line = next(s for s in block.splitlines() if "**DA vs 2D converged" in s)
     assert "2D converged where available (dx = 1 / 4 mm)" in line
     assert "1D-A70: converged: dx = 1 mm" in line and "1D-A45: no converged run: workflow run dx = 4 mm" in line
+
+
+def test_scorecard_reads_a_fallback_as_no_converged_value(ladder, tmp_path):
+    """The claims' "ours converged" column is filled only from a converged rung, never from the
+    workflow run the converged reference fell back to (read as the paper-resolution value)."""
+    from granudep.report.claims import scorecard
+    own, rungs = ladder
+    for name, ladder_files in (("fresh", []), ("ladder", rungs)):
+        res = tmp_path / name
+        (res / "compare").mkdir(parents=True)
+        (res / "isph").mkdir()
+        (res / "isph" / "T22-A70.nc").write_bytes(open(own[0], "rb").read())
+        main(["reference", str(res / "isph" / "T22-A70.nc"), "--ladder", *ladder_files, "--converged",
+              "--label", "2D converged", "-o", str(res / "compare" / "reference_converged.csv")])
+        row = scorecard(res).set_index("claim_id").loc["rest_time_T22-A70"]
+        if name == "fresh":
+            assert row["basis"] == "paper resolution" and row["ours_converged"] != row["ours_converged"]
+        else:
+            assert row["basis"] == "converged" and row["converged_dx_mm"] == pytest.approx(1.0)

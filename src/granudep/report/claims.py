@@ -152,6 +152,11 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
     specs = {r["claim_id"]: r for _, r in paper_claims().iterrows()}
     rows = []
     conv_ref = _read(root / "compare" / "reference_converged.csv")
+    if conv_ref is not None and "reference_basis" in conv_ref:
+        # a case whose converged reference fell back to the workflow's run has no converged value
+        # (granudep reference --converged, column reference_basis)
+        fell_back = conv_ref["reference_basis"].fillna("").astype(str).str.startswith("no converged run")
+        conv_ref = conv_ref[~fell_back]
     creg = Path(converged_regression) if converged_regression else None
 
     # --- Table 3 ---------------------------------------------------------------------------------
