@@ -140,3 +140,13 @@ def test_scorecard_reads_a_fallback_as_no_converged_value(ladder, tmp_path):
             assert row["basis"] == "paper resolution" and row["ours_converged"] != row["ours_converged"]
         else:
             assert row["basis"] == "converged" and row["converged_dx_mm"] == pytest.approx(1.0)
+
+
+def test_a_rung_not_at_rest_is_never_the_converged_one(ladder, tmp_path):
+    own, rungs = ladder
+    from granudep.io import open_dataset
+    ds = open_dataset(rungs[-1])
+    ds["time_to_rest"] = var(float("nan"), (), "s", "time to rest")   # the 1 mm run stopped before rest
+    stopped = syn.save(ds, tmp_path / "T22-A70_dx0.001_stopped.nc")
+    (run, basis, ok), = select_converged_runs(own[:1], [*rungs[:-1], stopped])
+    assert ok and run == rungs[-2] and "converged: dx = 1.4 mm" in basis

@@ -230,19 +230,21 @@ CONVERGENCE_TOL = 0.05
 CONVERGENCE_MEASURE = "v99"
 
 
-def _ladder_runout(row: dict, measure: str) -> float:
+def _ladder_runout(row: dict, measure: str) -> tuple[float, str]:
+    """(final runout ΔL/L0 of ``measure``, the measure read): the 2 d front where the file lacks it."""
     v = float(row.get(f"final_runout_norm_{measure}", math.nan)) if measure != "2d" else math.nan
-    return v if math.isfinite(v) else float(row["final_runout_norm"])
+    return (v, measure) if math.isfinite(v) else (float(row["final_runout_norm"]), "2d")
 
 
 def select_converged_runs(workflow_runs: Iterable, ladder_runs: Iterable = (), tol: float = CONVERGENCE_TOL,
                           measure: str = CONVERGENCE_MEASURE) -> list[tuple[object, str, bool]]:
     """Per Table 5 case, the finest *converged* 2D run; else the workflow's own run.
 
-    The rule (docs: README "DA vs 2D"): the runs of a case (``workflow_runs`` and ``ladder_runs``, failed
+    The rule (config ``compare.reference``): the runs of a case (``workflow_runs`` and ``ladder_runs``, failed
     runs skipped) form a ladder of distinct dx (one run per dx, the workflow's own first). Rung k is
     *converged* when its final runout ΔL/L0 (``measure``: the 1 % volume front, the 2 d front where the
-    file lacks it) differs from that of the next coarser rung by at most ``tol`` relative to rung k.
+    file lacks it) differs from that of the next coarser rung by at most ``tol`` relative to rung k, both
+    runs at rest (a run stopped before rest gives a lower bound, never a converged value).
     The reference is the finest converged rung. Without one (a fresh clone has no ladder run; or no step
     is within ``tol``) the case keeps its workflow run (the finest run where it has none), and the
     reason says so.
@@ -268,8 +270,9 @@ def select_converged_runs(workflow_runs: Iterable, ladder_runs: Iterable = (), t
         finally:
             if not isinstance(r, xr.Dataset):
                 ds.close()
-        by_case.setdefault(row["case"], []).append({"run": r, "dx": dx, "runout": _ladder_runout(row, measure),
-                                                    "own": i < len(workflow_runs)})
+        runout, used = _ladder_runout(row, measure)
+        by_case.setdefault(row["case"], []).append({"run": r, "dx": dx, "runout": runout, "measure": used,
+                                                    "at_rest": not row["note"], "own": i < len(workflow_runs)})
     out = []
     for case, items in sorted(by_case.items()):
         rungs: list[dict] = []
@@ -282,9 +285,10 @@ def select_converged_runs(workflow_runs: Iterable, ladder_runs: Iterable = (), t
         for k in range(len(rungs) - 1, 0, -1):
             fine, coarse = rungs[k], rungs[k - 1]
             change = (fine["runout"] - coarse["runout"]) / abs(fine["runout"]) if fine["runout"] else math.nan
-            if math.isfinite(change) and abs(change) <= tol:
+            if math.isfinite(change) and abs(change) <= tol and fine["at_rest"] and coarse["at_rest"] \
+                    and fine["measure"] == coarse["measure"]:
                 pick = fine
-                basis = (f"converged: dx = {1e3 * fine['dx']:g} mm, runout ({measure} front) {100 * change:+.1f} % "
+                basis = (f"converged: dx = {1e3 * fine['dx']:g} mm, runout ({fine['measure']} front) {100 * change:+.1f} % "
                          f"on dx = {1e3 * coarse['dx']:g} mm (tolerance {100 * tol:g} %)")
                 break
         if pick is not None:
