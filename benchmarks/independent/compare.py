@@ -19,11 +19,40 @@ import numpy as np
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from measures import DATA, L0, MEASURES, REPO, granudep_measures  # noqa: E402
+from measures import DATA, FIXED_TIMES, L0, MEASURES, REPO, granudep_measures  # noqa: E402
 
 GRANUDEP_FILES = {"T22-A70": "T22-A70_noslip_dx0.002.nc", "flat-glass-a0.5": "flat_glass_a0.5_noslip_dx0.002.nc",
                   "flat-glass-a1": "flat_glass_a1_noslip_dx0.002.nc"}
 FRONTS = ("front_2mm", "front_5mm", "front_v99")
+#: granudep diagnostic runs (T22-A70, no-slip, 4 mm): the bed stress of the first particle layer taken
+#: at the bed's normal stress (wall.bed_stress: bed, the default) or at the particle centre (centre,
+#: sessions 1-11; what a cell-centred viscosity at a no-slip bed does in Basilisk)
+BEDSTRESS_FILES = {"bed": "T22-A70_noslip_bed_dx0.004.nc", "centre": "T22-A70_noslip_centre_dx0.004.nc"}
+
+
+def bedstress_table(gdir: Path) -> pd.DataFrame:
+    """granudep's bed-stress diagnostic (4 mm): final rows to a CSV; returns the time series (stored too)."""
+    rows, tss = [], []
+    for bs, fn in BEDSTRESS_FILES.items():
+        if (gdir / fn).exists():
+            row, ts, _ = granudep_measures(gdir / fn)
+            rows.append({"case": "T22-A70", "wall.bed_stress": bs, "file": fn, **row})
+            tss.append(ts[["t_s", "front_2mm", "front_5mm", "front_v99", "moving_share"]].assign(bed_stress=bs))
+    tpath = DATA / "independent_granudep_bedstress_time.csv"
+    if not rows:
+        return read_csv(tpath) if tpath.exists() else pd.DataFrame()
+    if rows:
+        date = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+        with open(DATA / "independent_granudep_bedstress.csv", "w") as fh:
+            fh.write(f"# granudep T22-A70, no-slip bed, dx = 4 mm, wall.bed_stress bed vs centre (diagnostic of the "
+                     f"Basilisk disagreement); measured {date} by benchmarks/independent/compare.py; m, s\n")
+            pd.DataFrame(rows).to_csv(fh, index=False, float_format="%.6g")
+        print(pd.DataFrame(rows)[["wall.bed_stress", "status", "t_final_s", "front_2mm", "front_5mm", "front_v99",
+                                  "front_v99_t0.8", "front_v99_t1.2", "t_rest99"]].to_string(index=False))
+        with open(tpath, "w") as fh:
+            fh.write(f"# granudep T22-A70, no-slip, 4 mm, wall.bed_stress bed vs centre: fronts every 0.01 s; {date}\n")
+            pd.concat(tss).to_csv(fh, index=False, float_format="%.5g")
+        return pd.concat(tss)
 
 
 def read_csv(path: Path) -> pd.DataFrame:
@@ -67,8 +96,10 @@ def comparison(bas: pd.DataFrame, gd: pd.DataFrame) -> pd.DataFrame:
         fin, sec = g.iloc[0], (g.iloc[1] if len(g) > 1 else None)
         gr = gd[gd["case"] == case]
         gv = gr.iloc[0] if len(gr) else None
-        for m in MEASURES:
+        for m in MEASURES + tuple(f"front_v99_t{tt:g}" for tt in FIXED_TIMES):
             b = float(fin[m])
+            if m.startswith("front_v99_t") and not b == b:
+                continue   # the run was over before that time
             s = float(sec[m]) if sec is not None else float("nan")
             v = float(gv[m]) if gv is not None else float("nan")
             row = {"measure": m, "case": case, "basilisk_finest_dx_m": float(fin["dx_m"]), "basilisk_finest": b,
@@ -77,11 +108,12 @@ def comparison(bas: pd.DataFrame, gd: pd.DataFrame) -> pd.DataFrame:
                    "basilisk_change_finest_pair": (b - s) / abs(s) if s == s and s != 0 else float("nan"),
                    "granudep_2mm": v,
                    "rel_diff_granudep_vs_basilisk": (v - b) / abs(b) if b == b and b != 0 else float("nan")}
-            if m in FRONTS:   # the same, on the runout beyond the gate (x - L0)
+            if m in FRONTS or m.startswith("front_v99_t"):   # the same, on the runout beyond the gate (x - L0)
                 l0 = L0[case]
                 row["rel_diff_runout_dL"] = (v - b) / abs(b - l0) if b - l0 != 0 else float("nan")
                 row["basilisk_change_runout_dL"] = (b - s) / abs(s - l0) if s == s and s - l0 != 0 else float("nan")
-            row["within_10pct"] = bool(abs(row["rel_diff_granudep_vs_basilisk"]) <= 0.10)
+            r = row["rel_diff_granudep_vs_basilisk"]
+            row["within_10pct"] = "n/a" if not r == r else ("yes" if abs(r) <= 0.10 else "no")
             note = str(fin["status"])
             if float(fin["thickness_at_domain_end_m"]) > 0.0:
                 note += f"; deposit reaches the domain end x = {float(fin['domain_length_m']):.2f} m"
@@ -90,11 +122,14 @@ def comparison(bas: pd.DataFrame, gd: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
-def figure(bas, bts, bpr, gd, gts, gpr, path: Path) -> None:
+def figure(bas, bts, bpr, gd, gts, gpr, bst, path: Path) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     cases = ["T22-A70", "flat-glass-a0.5", "flat-glass-a1"]
+    done = set(bas.loc[bas["status"] != "incomplete", "run"])
+    bpr = bpr[bpr["run"].isin(done)]
+    bts = bts[bts["run"].isin(done)]
     fig, ax = plt.subplots(2, 3, figsize=(15, 7), constrained_layout=True)
     for j, case in enumerate(cases):
         a = ax[0, j]
@@ -103,7 +138,7 @@ def figure(bas, bts, bpr, gd, gts, gpr, path: Path) -> None:
         for k, dxv in enumerate(dxs):
             p = main[main["dx_m"] == dxv]
             a.plot(p["x_m"], p["h_m"], lw=1.0 + 0.6 * k, color=plt.cm.Blues(0.4 + 0.6 * (k + 1) / len(dxs)),
-                   label=f"Basilisk {dxv * 1e3:g} mm")
+                   label=f"Basilisk {dxv * 1e3:.3g} mm")
         pf = bpr[(bpr["case"] == case) & bpr["run"].str.contains("pf_")]
         for k, (run, p) in enumerate(pf.groupby("run")):
             a.plot(p["x_m"], p["h_m"], "--", color=f"C{4 + k}", lw=1.0,
@@ -112,17 +147,31 @@ def figure(bas, bts, bpr, gd, gts, gpr, path: Path) -> None:
             p = gpr[gpr["case"] == case]
             a.plot(p["x_m"], p["h_m"], color="C3", lw=1.6, label="granudep 2 mm")
         a.set_title(f"{case}: final deposit (no-slip bed)")
+        if case == "T22-A70":
+            a.set_ylim(0, 0.07)
         a.set_xlabel("x from the back wall (m)")
         a.set_ylabel("thickness (m)")
         a.legend(fontsize=8)
         a = ax[1, j]
-        if dxs:
+        if dxs and case == "T22-A70":   # the 1 % volume front of every resolution (the box ends at 1.92 m)
+            for k, dxv in enumerate(dxs):
+                r = bts[(bts["case"] == case) & (bts["dx_m"] == dxv) & ~bts["run"].str.contains("pf_")]
+                a.plot(r["t_s"], r["front_v99"], color=plt.cm.Blues(0.4 + 0.6 * (k + 1) / len(dxs)),
+                       lw=1.0 + 0.5 * k, label=f"Basilisk {dxv * 1e3:.3g} mm front_v99")
+            if not bst.empty:
+                for bs, ls in (("centre", "-."), ("bed", "--")):
+                    r = bst[bst["bed_stress"] == bs]
+                    if len(r):
+                        a.plot(r["t_s"], r["front_v99"], ls, color="C1",
+                               label=f"granudep 4 mm, wall.bed_stress {bs}, front_v99")
+        elif dxs:
             fin = bts[(bts["case"] == case) & (bts["dx_m"] == dxs[-1]) & ~bts["run"].str.contains("pf_")]
             for m, ls in (("front_v99", "-"), ("front_5mm", "--"), ("front_2mm", ":")):
                 a.plot(fin["t_s"], fin[m], ls, color="C0", label=f"Basilisk {dxs[-1] * 1e3:g} mm {m}")
         if not gts.empty and case in set(gts["case"]):
             g = gts[gts["case"] == case]
-            for m, ls in (("front_v99", "-"), ("front_5mm", "--"), ("front_2mm", ":")):
+            for m, ls in ((("front_v99", "-"),) if case == "T22-A70" else
+                          (("front_v99", "-"), ("front_5mm", "--"), ("front_2mm", ":"))):
                 a.plot(g["t_s"], g[m], ls, color="C3", label=f"granudep 2 mm {m}")
         a.set_xlabel("t (s)")
         a.set_ylabel("front (m)")
@@ -147,7 +196,8 @@ def main() -> None:
         cmp_.to_csv(fh, index=False, float_format="%.5g")
     with pd.option_context("display.width", 250, "display.max_columns", 30):
         print(cmp_.to_string(index=False))
-    figure(bas, bts, bpr, gd, gts, gpr, REPO / "docs" / "figures" / "independent_vs_granudep.png")
+    bst = bedstress_table(a.granudep_dir)
+    figure(bas, bts, bpr, gd, gts, gpr, bst, REPO / "docs" / "figures" / "independent_vs_granudep.png")
 
 
 if __name__ == "__main__":

@@ -39,6 +39,8 @@ REST_SPEED, REST_DURATION = 0.1, 0.1
 CASES = {"flat05": "flat-glass-a0.5", "flat1": "flat-glass-a1", "T22": "T22-A70",
          "T22pf": "T22-A70"}   # T22pf_*: diagnostic runs with granudep's pressure floor (column.c, PFLOOR)
 L0 = {"flat-glass-a0.5": 0.1, "flat-glass-a1": 0.1, "T22-A70": 0.2}
+#: the 1 % volume front is also read at these times (s): T22-A70 before any run reaches the box end
+FIXED_TIMES = (0.4, 0.8, 1.2)
 MEASURES = ("front_2mm", "front_5mm", "front_v99", "t_rest99", "depth_x0.05", "depth_x0.1")
 
 
@@ -86,12 +88,14 @@ def basilisk_run(runs: Path, name: str) -> tuple[dict, pd.DataFrame, pd.DataFram
             p = line.split()
             if p and p[0] == name and "cpu_user_s" in p:
                 cpu = float(p[p.index("cpu_user_s") + 1])
+    at = {f"front_v99_t{tt:g}": float(ts.loc[np.argmin(np.abs(t - tt)), "front_v99"]) if t[-1] >= tt - 1e-9
+          else float("nan") for tt in FIXED_TIMES}
     row = {"case": case, "run": name, "variant": "pressure floor (diagnostic)" if "pf_" in name else "granular.h as is",
            "dx_m": dx, "cells": f"{nxc}x{nyc}", "status": status,
            "t_final_s": float(t[-1]), **final, "t_rest99": rest_time_from_share(t, stats[:, 2]),
            "volume_change": float(stats[-1, 1] / stats[0, 1] - 1.0),
            "domain_length_m": float(edges[-1]),
-           "thickness_at_domain_end_m": float(h[-1, -1]), "cpu_user_s": cpu}
+           "thickness_at_domain_end_m": float(h[-1, -1]), **at, "cpu_user_s": cpu}
     nz = h[-1] > 0
     prof_df = pd.DataFrame({"case": case, "run": name, "dx_m": dx, "x_m": 0.5 * (edges[1:] + edges[:-1])[nz],
                             "h_m": h[-1][nz]})
@@ -119,11 +123,13 @@ def granudep_measures(nc: Path) -> tuple[dict, pd.DataFrame, tuple[np.ndarray, n
         e, d = prof(k)
         rows.append({"t_s": t[k], **profile_measures(e, d), "moving_share": float(ds["moving_share"].values[k])})
     e, d = prof(t.size - 1)
-    row = {"dx_m": dx, "status": str(ds.attrs.get("status", "")), "t_final_s": float(t[-1]),
+    tsd = pd.DataFrame(rows)
+    at = {f"front_v99_t{tt:g}": float(tsd.loc[np.argmin(np.abs(t - tt)), "front_v99"]) for tt in FIXED_TIMES}
+    row = {"dx_m": dx, **at, "status": str(ds.attrs.get("status", "")), "t_final_s": float(t[-1]),
            **profile_measures(e, d), "t_rest99": float(ds["time_to_rest_mass99"].values),
            "particles": int(ds.sizes["particle"]), "commit": str(ds.attrs.get("granudep_commit", "")),
            "granudep_final_front_v99": float(ds["final_front_v99"]), "granudep_final_front_5mm": float(ds["final_front_5mm"])}
-    return row, pd.DataFrame(rows), (0.5 * (e[1:] + e[:-1]), d)
+    return row, tsd, (0.5 * (e[1:] + e[:-1]), d)
 
 
 def main() -> None:
