@@ -238,7 +238,7 @@ def plot(csv_path, rows, out: Path) -> None:
     import matplotlib.pyplot as plt
     import pandas as pd
     df = pd.read_csv(csv_path) if csv_path else pd.DataFrame(rows)
-    df["variant"] = df["variant"].fillna("")
+    df["variant"] = ["" if pd.isna(v) else str(v) for v in df["variant"]]
     cases = list(dict.fromkeys(df.case))
     fig, axes = plt.subplots(2, len(cases), figsize=(5 * len(cases), 7), squeeze=False)
     for j, case in enumerate(cases):
