@@ -5,8 +5,15 @@ particles (T22-A150 at dx = 4, 2, 1 mm: the particle counts of the issue), from 
 steps, see :func:`refine`; built once and cached under results/bench_cache/);
 the fitted exponent of cost/step vs N; the peak RSS; optionally T22-A70 to rest (``--to-rest``).
 
+Each variant also prints the parts of its step (issue 26: PPE assembly, PPE CG, viscous assembly,
+viscous CG, the rest) and the issue-26 targets (printed, never asserted): <= 10 ms/step at 3750
+particles on one thread, and T22-A70 at 1 mm to rest <= 20 min estimated from ms/step at 28 000
+particles (power law between the measured N) x 13 877 steps. A variant is a
+numerics.pressure_solver value, optionally /numerics.ppe_operator (cg_dic/matrix_free).
+
 Run (one command per figure set):
-  NUMBA_NUM_THREADS=1 python benchmarks/bench_isph_scaling.py [--dx 4,2,1] [--steps 50] [--solvers cg_dic,amg_sa]
+  NUMBA_NUM_THREADS=1 python benchmarks/bench_isph_scaling.py [--dx 4,2,1] [--steps 50] [--solvers cg_two_level,cg_dic]
+  python benchmarks/bench_isph_scaling.py --threads 1,2 --solvers cg_two_level,cg_dic   (issue 26's figures, docs/speed.md)
       [--set numerics.projection=approximate]   (scheme options of the timed steps; default: adjoint pair)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py ...
   python benchmarks/bench_isph_scaling.py --threads 1,2      (one subprocess per thread count, interleaved)
@@ -237,7 +244,31 @@ def per_step(args) -> None:
             cs = [statistics.median(r["cpu_ms"] for r in rows[(dx, solver)]) for dx in dxs]
             print(f"  {solver}: cost/step ~ N^{fit_exponent(ns, ts):.3f} (wall), N^{fit_exponent(ns, cs):.3f} (CPU) "
                   f"over N = {ns[0]}..{ns[-1]}")
+        print_targets(solver, ns, ts)
     print(f"peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
+
+
+#: T22-A70 at dx = 1 mm: particles and steps to rest (session 10's run, README "A 1 mm rung")
+N_1MM, STEPS_1MM = 28_000, 13_877
+
+
+def print_targets(solver: str, ns, ts) -> None:
+    """Issue 26's targets (printed, never asserted): <= 10 ms/step at 3750 particles on one thread;
+    T22-A70 at 1 mm to rest <= 20 min, estimated as ms/step at 28 000 particles (the power law
+    through the two nearest measured N) times 13 877 steps."""
+    threads = os.environ.get("NUMBA_NUM_THREADS", "(unset)")
+    for n, t in zip(ns, ts):
+        if n == 3750:
+            print(f"  target {solver}: <= 10 ms/step at 3750 particles (NUMBA_NUM_THREADS={threads}): "
+                  f"{t:.2f} ms/step, {'met' if t <= 10.0 else 'not met'}")
+    if len(ns) > 1 and min(ns) <= N_1MM <= max(ns):
+        pairs = sorted(zip(ns, ts))
+        (n0, t0), (n1, t1) = next((a, b) for a, b in zip(pairs, pairs[1:]) if a[0] <= N_1MM <= b[0])
+        k = math.log(t1 / t0) / math.log(n1 / n0)
+        est = t0 * (N_1MM / n0) ** k
+        minutes = est * STEPS_1MM / 6e4
+        print(f"  target {solver}: T22-A70 at 1 mm to rest <= 20 min: estimated {est:.0f} ms/step at {N_1MM} "
+              f"particles x {STEPS_1MM} steps = {minutes:.1f} min, {'met' if minutes <= 20.0 else 'not met'}")
 
 
 def to_rest(args) -> None:

@@ -118,9 +118,12 @@ def test_solver_nan_rhs_falls_back_and_the_nan_then_stops_the_run(monkeypatch, t
     assert ds.attrs["linear_solver_fallbacks"] == 1
 
 
-@pytest.mark.parametrize("projection, cg", [("approximate", "pcg_dic"), ("adjoint_pair", "pcg_two_level")])
+@pytest.mark.parametrize("projection, cg, solver", [("approximate", "pcg_dic", "cg_dic"),
+                                                    ("adjoint_pair", "pcg_dic_split", "cg_dic"),
+                                                    ("adjoint_pair", "pcg_two_level", "cg_two_level"),
+                                                    ("adjoint_pair/matrix_free", "pcg_two_level_free", "cg_two_level")])
 @pytest.mark.parametrize("mode", ["breakdown", "raise", "nan"])
-def test_run_survives_a_cg_failure_and_counts_it(monkeypatch, mode, projection, cg):
+def test_run_survives_a_cg_failure_and_counts_it(monkeypatch, mode, projection, cg, solver):
     """The PPE CG fails once (planted: a breakdown code, a ZeroDivisionError or a NaN solution) at
     step 4: the step is solved by SuperLU and the run goes on; the output counts one fallback."""
     real = getattr(solver_mod, cg)
@@ -137,7 +140,10 @@ def test_run_survives_a_cg_failure_and_counts_it(monkeypatch, mode, projection, 
             return x, it, BREAKDOWN
         return real(*a)
     monkeypatch.setattr(solver_mod, cg, planted)
-    ds = run_isph("T22-A70", dx=0.01, t_end=0.05, **{"numerics.projection": projection})
+    projection, _, operator = projection.partition("/")
+    ds = run_isph("T22-A70", dx=0.01, t_end=0.05, **{"numerics.projection": projection,
+                                                     "numerics.pressure_solver": solver,
+                                                     "numerics.ppe_operator": operator or "assembled"})
     assert not ds.attrs["status"].startswith("failed")
     assert ds.attrs["linear_solver_fallbacks"] == 1
     assert ds.attrs["n_steps"] > 4 and calls[0] > 4

@@ -133,10 +133,14 @@ def test_fast_ppe_solvers_report_breakdown_and_zero_rhs():
 def test_config_errors_name_the_key_and_the_allowed_values():
     with pytest.raises(ConfigError, match=r"^numerics.ppe_operator: must be one of"):
         load_config("T22-A70", **{"numerics.ppe_operator": "sparse"})
+    for solver in ("cg_ssor", "cg_dic"):
+        with pytest.raises(ConfigError, match=r"^numerics.ppe_operator: matrix_free needs"):
+            load_config("T22-A70", **{"numerics.ppe_operator": "matrix_free", "numerics.pressure_solver": solver})
     with pytest.raises(ConfigError, match=r"^numerics.ppe_operator: matrix_free needs"):
-        load_config("T22-A70", **{"numerics.ppe_operator": "matrix_free", "numerics.pressure_solver": "cg_ssor"})
-    with pytest.raises(ConfigError, match=r"^numerics.ppe_operator: matrix_free needs"):
-        load_config("T22-A70", **{"numerics.ppe_operator": "matrix_free", "numerics.projection": "approximate"})
+        load_config("T22-A70", **{"numerics.ppe_operator": "matrix_free", "numerics.projection": "approximate",
+                                  "numerics.pressure_solver": "cg_two_level"})
+    assert load_config("T22-A70", **{"numerics.ppe_operator": "matrix_free",
+                                     "numerics.pressure_solver": "cg_two_level"}).numerics.ppe_operator == "matrix_free"
     with pytest.raises(ConfigError, match=r"^numerics.pressure_solver: must be one of"):
         load_config("T22-A70", **{"numerics.pressure_solver": "ssor"})
     cfg = load_config("T22-A70", **{"numerics.pressure_solver": "cg_ssor"})

@@ -197,7 +197,8 @@ class Numerics:
                                      "iterates bit for bit), CG with diagonal incomplete Cholesky (Eisenstat; "
                                      "~2.5x fewer iterations, ~2x faster, true-residual stopping test; with "
                                      "projection adjoint_pair, where incomplete Cholesky breaks down, cg_dic "
-                                     "means cg_two_level), two-level CG (Jacobi + an aggregation coarse space; "
+                                     "means cg_ssor since issue 26, cg_two_level before), two-level CG (Jacobi + "
+                                     "an aggregation coarse space; "
                                      "dx-independent iterations), or CG "
                                      "preconditioned by an algebraic-multigrid V-cycle (pyamg, optional package: "
                                      "smoothed aggregation or Ruge-Stuben; N-independent iterations but slower "
@@ -206,7 +207,7 @@ class Numerics:
                                      "which never breaks down (adjoint-pair PPE at 4 mm: 47 -> 29 iterations; "
                                      "docs/speed.md)")
     ppe_operator: str = param("assembled", choices=("assembled", "matrix_free"),
-                              doc="adjoint_pair PPE with the two-level CG (pressure_solver cg_dic or "
+                              doc="adjoint_pair PPE with the two-level CG (pressure_solver "
                                   "cg_two_level): the matrix assembled as the product (1 - eps) D D^T + eps L_c "
                                   "(CSR), or applied unassembled as D (D^T x) + eps L_c x (the same operator; "
                                   "no product to form, each iteration dearer; docs/speed.md)")
@@ -282,9 +283,9 @@ class IsphConfig:
             raise ConfigError("numerics.pressure_correction: incremental needs numerics.projection: adjoint_pair "
                               f"(got numerics.projection: {n.projection}); use auto or non_incremental")
         if n.ppe_operator == "matrix_free" and (n.projection != "adjoint_pair"
-                                                or n.pressure_solver not in ("cg_dic", "cg_two_level")):
+                                                or n.pressure_solver != "cg_two_level"):
             raise ConfigError("numerics.ppe_operator: matrix_free needs numerics.projection: adjoint_pair and "
-                              "numerics.pressure_solver: cg_dic or cg_two_level (got "
+                              "numerics.pressure_solver: cg_two_level (got "
                               f"{n.projection} / {n.pressure_solver})")
         if g.L0 < 2 * n.dx or g.H0 < 2 * n.dx:
             raise ConfigError(f"numerics.dx: must be <= min(L0, H0)/2 = {min(g.L0, g.H0) / 2} (got {n.dx})")

@@ -509,15 +509,17 @@ def mic_diagonal(lp, li, lv, up, uv, diag, alpha):
 
 
 @njit(cache=True)
-def ssor_diagonal(diag):
-    """SSOR pivots (ω = 1, ``mic < 0`` in :func:`pcg_dic`): d̃ = diag(A), M = (D + L) D⁻¹ (D + U), the
-    symmetric Gauss-Seidel preconditioner, SPD for any SPD A (no factorisation, no breakdown for a
-    positive diagonal). For the adjoint-pair PPE, where incomplete Cholesky breaks down (issue 26).
-    Returns (d̃, first row with a diagonal that is not positive, or -1)."""
+def ssor_diagonal(diag, omega=1.0):
+    """SSOR pivots (``mic = -omega < 0`` in :func:`pcg_dic`): d̃ = diag(A)/ω, M ∝ (D/ω + L) (D/ω)⁻¹
+    (D/ω + U); ω = 1 is the symmetric Gauss-Seidel preconditioner. SPD for any SPD A and 0 < ω < 2
+    (no factorisation, no breakdown for a positive diagonal). For the adjoint-pair PPE, where
+    incomplete Cholesky breaks down (issue 26). Returns (d̃, first row with a diagonal that is not
+    positive, or -1)."""
+    dt = diag / omega
     for i in range(diag.size):
         if not diag[i] > 0.0:
-            return diag.copy(), i
-    return diag.copy(), -1
+            return dt, i
+    return dt, -1
 
 
 @njit(cache=True)
@@ -593,7 +595,7 @@ def pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, mic=
         nr = math.sqrt(_dot(r, r))
     if nr < thresh:
         return x, 0, 0
-    dt, bad = ssor_diagonal(diag) if mic < 0.0 else mic_diagonal(lp, li, lv, up, uv, diag, mic)
+    dt, bad = ssor_diagonal(diag, -mic) if mic < 0.0 else mic_diagonal(lp, li, lv, up, uv, diag, mic)
     if bad >= 0:
         return x, 0, -1  # breakdown: the caller falls back to a direct solve
     kd = np.empty(n)

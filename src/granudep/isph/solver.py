@@ -606,7 +606,7 @@ class IsphSolver:
         # two-level CG (Jacobi + aggregation coarse space, iterations independent of dx)
         solver = self.cfg.numerics.pressure_solver
         if solver == "cg_dic" and self.cfg.numerics.projection == "adjoint_pair":
-            solver = "cg_two_level"
+            solver = "cg_ssor"     # since issue 26 (SSOR-CG on the triangles; before: cg_two_level)
         return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
                               method={"cg_dic": "dic", "cg_two_level": "two_level", "cg_ssor": "ssor"}.get(solver,
                                                                                                         "jacobi"))
@@ -616,7 +616,7 @@ class IsphSolver:
         """How the adjoint-pair PPE reaches its solver: ``csr`` (assembled), ``free`` (matrix-free,
         ``numerics.ppe_operator``) or ``triangles`` (``cg_ssor``: the SSOR sweeps' two triangles)."""
         n = self.cfg.numerics
-        if n.pressure_solver == "cg_ssor":
+        if n.pressure_solver in ("cg_ssor", "cg_dic"):     # cg_dic: SSOR on the adjoint pair (issue 26)
             return "triangles"
         return "free" if n.ppe_operator == "matrix_free" else "csr"
 
