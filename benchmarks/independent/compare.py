@@ -27,7 +27,8 @@ FRONTS = ("front_2mm", "front_5mm", "front_v99")
 #: granudep diagnostic runs (T22-A70, no-slip, 4 mm): the bed stress of the first particle layer taken
 #: at the bed's normal stress (wall.bed_stress: bed, the default) or at the particle centre (centre,
 #: sessions 1-11; what a cell-centred viscosity at a no-slip bed does in Basilisk)
-BEDSTRESS_FILES = {"bed": "T22-A70_noslip_bed_dx0.004.nc", "centre": "T22-A70_noslip_centre_dx0.004.nc"}
+BEDSTRESS_FILES = {"bed": "T22-A70_noslip_bed_dx0.004.nc", "centre": "T22-A70_noslip_centre_dx0.004.nc",
+                   "centre, 2 mm, to t = 1.25 s": "T22-A70_noslip_centre_dx0.002_t1.25.nc"}
 
 
 def bedstress_table(gdir: Path) -> pd.DataFrame:
@@ -44,13 +45,14 @@ def bedstress_table(gdir: Path) -> pd.DataFrame:
     if rows:
         date = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
         with open(DATA / "independent_granudep_bedstress.csv", "w") as fh:
-            fh.write(f"# granudep T22-A70, no-slip bed, dx = 4 mm, wall.bed_stress bed vs centre (diagnostic of the "
+            fh.write(f"# granudep T22-A70, no-slip bed, dx = 4 mm (and 2 mm to t = 1.25 s), wall.bed_stress bed vs centre (diagnostic of the "
                      f"Basilisk disagreement); measured {date} by benchmarks/independent/compare.py; m, s\n")
             pd.DataFrame(rows).to_csv(fh, index=False, float_format="%.6g")
         print(pd.DataFrame(rows)[["wall.bed_stress", "status", "t_final_s", "front_2mm", "front_5mm", "front_v99",
                                   "front_v99_t0.8", "front_v99_t1.2", "t_rest99"]].to_string(index=False))
         with open(tpath, "w") as fh:
-            fh.write(f"# granudep T22-A70, no-slip, 4 mm, wall.bed_stress bed vs centre: fronts every 0.01 s; {date}\n")
+            fh.write(f"# granudep T22-A70, no-slip, 4 mm (2 mm to 1.25 s), wall.bed_stress bed vs centre: fronts "
+                     f"every 0.01 s; {date}\n")
             pd.concat(tss).to_csv(fh, index=False, float_format="%.5g")
         return pd.concat(tss)
 
@@ -159,11 +161,10 @@ def figure(bas, bts, bpr, gd, gts, gpr, bst, path: Path) -> None:
                 a.plot(r["t_s"], r["front_v99"], color=plt.cm.Blues(0.4 + 0.6 * (k + 1) / len(dxs)),
                        lw=1.0 + 0.5 * k, label=f"Basilisk {dxv * 1e3:.3g} mm front_v99")
             if not bst.empty:
-                for bs, ls in (("centre", "-."), ("bed", "--")):
+                for k, bs in enumerate(bst["bed_stress"].unique()):
                     r = bst[bst["bed_stress"] == bs]
-                    if len(r):
-                        a.plot(r["t_s"], r["front_v99"], ls, color="C1",
-                               label=f"granudep 4 mm, wall.bed_stress {bs}, front_v99")
+                    a.plot(r["t_s"], r["front_v99"], ("-.", "--", ":")[k % 3], color=f"C{1 + k}",
+                           label=f"granudep wall.bed_stress {bs}{'' if 'mm' in bs else ', 4 mm'}, front_v99")
         elif dxs:
             fin = bts[(bts["case"] == case) & (bts["dx_m"] == dxs[-1]) & ~bts["run"].str.contains("pf_")]
             for m, ls in (("front_v99", "-"), ("front_5mm", "--"), ("front_2mm", ":")):
