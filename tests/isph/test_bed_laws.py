@@ -133,10 +133,11 @@ def test_friction_laws_need_the_wall_reaction():
         load_config("T22-A70", **{"wall.bed_stress": "top"})
 
 
-@pytest.mark.parametrize("law", ["mu_w_i", "stress_limited", "no_slip"])
-def test_bed_laws_never_create_energy_on_a_collapse(law):
+@pytest.mark.parametrize("law, bed_stress", [("mu_w_i", "bed"), ("stress_limited", "bed"), ("no_slip", "bed"),
+                                             ("no_slip", "hydrostatic")])
+def test_bed_laws_never_create_energy_on_a_collapse(law, bed_stress):
     from granudep.isph.api import run_isph
-    ds = run_isph("T22-A70", progress=False, dx=0.008, t_end=0.6, **{"wall.slip": law})
+    ds = run_isph("T22-A70", progress=False, dx=0.008, t_end=0.6, **{"wall.slip": law, "wall.bed_stress": bed_stress})
     assert float(ds.attrs["energy_max_excess"]) <= 2e-3
     wall = float(ds["wall_friction_energy"].values[-1])
     assert 0.0 < wall < float(ds["dissipated_energy"].values[-1])

@@ -387,12 +387,22 @@ class IsphSolver:
             kns = walls.viscous_wall_drag(nb, nf, self.x, self.y, self.eta, self.wall_surface, self.planes,
                                           self.slip, c.wall.slip_length, self.dx, rho, self.vol, self.eps2,
                                           self.lap_norm, self.wall_ns)
+            scale = None
             if (c.wall.bed_stress == "bed" and c.rheology.model == "mu_i" and self.reaction_friction
                     and self.wall_an is not None and self.wall_an.shape[0] == nf):
                 # the μ(I) wall stress at the bed's normal stress p_w = ρ a_n dx, not the first
                 # layer's centre pressure (a sheet one particle thick held half its weight and slid on)
                 pw = rho * self.wall_an * self.dx
                 scale = np.where(self.wall_an > 0.0, np.maximum(pw / np.maximum(self.p_rheo, 1e-300)[:, None], 1.0), 1.0)
+            elif c.wall.bed_stress == "hydrostatic" and c.rheology.model == "mu_i":
+                # the first layer's pressure extrapolated to the wall plane, p_w = p_i + ρ g_n d_i
+                # (d_i: the particle's distance to the plane, g_n = max(−g·n, 0)): smooth in time
+                gn = np.maximum(-(self.gx * self.planes[:, 0] + self.gy * self.planes[:, 1]), 0.0)
+                dist = np.maximum(np.outer(self.x[:nf], self.planes[:, 0]) + np.outer(self.y[:nf], self.planes[:, 1])
+                                  - self.planes[:, 2], 0.0)
+                pi = np.maximum(self.p_rheo, 1e-300)[:, None]
+                scale = (pi + rho * gn * dist) / pi
+            if scale is not None:
                 extra = kns * (scale - 1.0)
                 data[indptr[:-1]] += dt * (extra @ (self.planes[:, 1] ** 2))
                 diag_v = diag_v + dt * (extra @ (self.planes[:, 0] ** 2))
