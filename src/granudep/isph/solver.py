@@ -15,7 +15,7 @@ numba kernels of :mod:`granudep.isph.operators`, :mod:`~granudep.isph.walls`,
    pressure already nearly balances;
 4. projection (default ``numerics.projection: adjoint_pair``, :mod:`.projection`): PPE
    ((1 − ε) D Dᵀ + ε L_c) p = −ρ/Δt D u* (+ density-invariant source) over the granular and the
-   wetted wall nodes, Dirichlet p_fs on the free surface, solved by two-level CG, for the velocity
+   wetted wall nodes, Dirichlet p_fs on the free surface, solved by SSOR-CG (``cg_dic``, session 12; two-level CG: ``cg_two_level``), for the velocity
    u* + Δt/ρ G pⁿ (incremental) or u*; corrector uⁿ⁺¹ = u* − Δt/ρ G (pⁿ⁺¹ − pⁿ) (or − Δt/ρ G pⁿ⁺¹),
    G = −Dᵀ, energy-stable. ``approximate`` (before session 7): compact PPE
    Σ a_ij (p_i − p_j) = −ρ/Δt ∇·u*, mirror-pressure Neumann walls, renormalised difference gradient;
