@@ -50,6 +50,15 @@ def gradient_slip_code(slip: int) -> int:
 
 
 @njit(cache=True, inline="always")
+def tangential_speed(u, v, nx, ny):
+    """|u_t|: the speed along a wall of unit normal n."""
+    un = u * nx + v * ny
+    utx = u - un * nx
+    uty = v - un * ny
+    return math.sqrt(utx * utx + uty * uty)
+
+
+@njit(cache=True, inline="always")
 def wall_beta_linear(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
     """β of the linear extrapolation u_w = u_i (b − d_w)/(d_i + b) (no cap; d_i floored at dx/4):
     u_i − u_w = β u_i for the tangential component (velocity gradient of the rheology)."""
@@ -189,10 +198,7 @@ def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, d
             ny = planes[q, 1]
             gn = max(-(gx * nx + gy * ny), 0.0)
             pw = max(max(p[i], 0.0) + rho * gn * 0.5 * dx, rho * gn * col[i, q])
-            un = u[i] * nx + v[i] * ny
-            utx = u[i] - un * nx
-            uty = v[i] - un * ny
-            ut = math.sqrt(utx * utx + uty * uty)
+            ut = tangential_speed(u[i], v[i], nx, ny)
             # traction μ_B p_w on the wall length l_i carried by the particle (volume dx²), but never
             # less than μ_B times the weight of its own column, ρ g_n h_col dx: clumped contact
             # particles (spacing < dx) carry less bed length than their weight needs, and a cluster of
@@ -219,10 +225,7 @@ def coulomb_drag_from_reaction(nf, u, v, a_n, planes, mu_wall, dt, u_eps, diag_u
                 continue
             nx = planes[q, 0]
             ny = planes[q, 1]
-            un = u[i] * nx + v[i] * ny
-            utx = u[i] - un * nx
-            uty = v[i] - un * ny
-            ut = math.sqrt(utx * utx + uty * uty)
+            ut = tangential_speed(u[i], v[i], nx, ny)
             kd = mu_wall * an / max(ut, u_eps)
             diag_u[i] += dt * kd * ny * ny
             diag_v[i] += dt * kd * nx * nx
@@ -286,10 +289,7 @@ def mu_w_i_drag_from_reaction(nf, u, v, a_n, planes, mu_s, mu_2, i0, d, rho_s, r
                 continue
             nx = planes[q, 0]
             ny = planes[q, 1]
-            un = u[i] * nx + v[i] * ny
-            utx = u[i] - un * nx
-            uty = v[i] - un * ny
-            ut = math.sqrt(utx * utx + uty * uty)
+            ut = tangential_speed(u[i], v[i], nx, ny)
             iw = wall_inertial_number(ut, rho * an * dx, rho_s, shear_length, d)
             kd = wall_friction_mu_i(iw, mu_s, mu_2, i0) * an / max(ut, u_eps)
             diag_u[i] += dt * kd * ny * ny
@@ -350,10 +350,7 @@ def stress_limited_drag(nf, u, v, kns, p_rheo, a_n, planes, mu_wall, dx, dt, rho
             k_ns = kns[i, q] * max(rho * an * dx / max(p_rheo[i], 1e-300), 1.0)
             nx = planes[q, 0]
             ny = planes[q, 1]
-            un = u[i] * nx + v[i] * ny
-            utx = u[i] - un * nx
-            uty = v[i] - un * ny
-            ut = math.sqrt(utx * utx + uty * uty)
+            ut = tangential_speed(u[i], v[i], nx, ny)
             kd = min(k_ns, mu_wall * an / max(ut, u_eps))
             diag_u[i] += dt * kd * ny * ny
             diag_v[i] += dt * kd * nx * nx
