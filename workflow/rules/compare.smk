@@ -19,7 +19,10 @@ READINGS = list(_CMP.get("readings", ["computed", "paper", "paper-dimensional"])
 # the default chain's reading: da.ab_source, normalised (eq 36 as printed)
 DEFAULT_READING = config["da"]["ab_source"]
 REFERENCE_DX = _REF.get("dx")
-REFERENCE_EXTRA = sorted({p for pat in _REF.get("runs", []) for p in _glob.glob(pat)})
+# a run stopped by a signal or a blow-up leaves NAME.interrupted.nc / NAME.failed.nc beside its
+# output: partial records, never a reference
+REFERENCE_EXTRA = sorted({p for pat in _REF.get("runs", []) for p in _glob.glob(pat)
+                          if not p.endswith((".interrupted.nc", ".failed.nc"))})
 REFERENCE_SELECT = "dx" if REFERENCE_DX is not None else _REF.get("select", "converged")
 REFERENCE_TOL = float(_REF.get("tolerance", 0.05))
 REFERENCE_MEASURE = _REF.get("measure", "v99")
