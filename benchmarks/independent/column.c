@@ -28,6 +28,11 @@ kinetic energy per unit width / rho), OUTPREFIX.log.
 p >= rho g cos(theta) dx/2. run_basilisk.sh makes granular_pfloor.h from granular.h with sed. */
 double pfloor_coef = 0.;
 #include "granular_pfloor.h"
+#elif defined(BEDSTRESS)
+/** Diagnostic variant (-DBEDSTRESS): the bed face's mu(I) viscosity at the bed's normal stress
+(granudep's wall.bed_stress: bed); run_basilisk.sh makes granular_bed.h from granular.h. */
+double bed_pn = 0.;
+#include "granular_bed.h"
 #else
 #include "granular.h"
 #endif
@@ -73,6 +78,9 @@ int main (int argc, char * argv[])
   TU = sqrt(1./GSI); VU = sqrt(GSI);
 #ifdef PFLOOR
   pfloor_coef = 0.5*cos(theta);
+#endif
+#ifdef BEDSTRESS
+  bed_pn = 0.5*cos(theta);
 #endif
   etamax = etamax_si/(rho_bulk*sqrt(GSI));   // Pa s -> units of rho sqrt(g) (1 m)^1.5
   dimensions (nx = nx, ny = ny);
@@ -150,6 +158,17 @@ event output_profiles (t += 0.02/sqrt(1./GSI)) {
 event logfile (i += 50) {
   fprintf (stderr, "t = %.4f s, i = %d, dt = %.3e s, mg p %d u %d\n", t*TU, i, dt*TU, mgp.i, mgu.i);
   fflush (stderr);
+}
+
+/** Field dumps (diagnostic): x y f u v p of every cell holding grains at 0.4, 0.8 and 1.2 s. */
+event dump_fields (t = {0.4/sqrt(1./GSI), 0.8/sqrt(1./GSI), 1.2/sqrt(1./GSI)}) {
+  char name[600];
+  sprintf (name, "%s.field_t%.1f", prefix, t*TU);
+  FILE * fp = fopen (name, "w");
+  foreach (serial)
+    if (f[] > 0.01)
+      fprintf (fp, "%g %g %g %g %g %g\n", x, y, f[], u.x[]*VU, u.y[]*VU, p[]*rho_bulk*GSI);
+  fclose (fp);
 }
 
 /** Keeps the run loop alive (Basilisk stops when no timed event is left); the run ends in

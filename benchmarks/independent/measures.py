@@ -37,7 +37,8 @@ D_GRAIN = 0.0007          # glass beads (Table 2), for the 2 d front
 REST_SPEED, REST_DURATION = 0.1, 0.1
 #: run name -> (case, dx); the cases of run_basilisk.sh
 CASES = {"flat05": "flat-glass-a0.5", "flat1": "flat-glass-a1", "T22": "T22-A70",
-         "T22pf": "T22-A70"}   # T22pf_*: diagnostic runs with granudep's pressure floor (column.c, PFLOOR)
+         "T22pf": "T22-A70",   # T22pf_*: diagnostic runs with granudep's pressure floor (column.c, PFLOOR)
+         "T22bed": "T22-A70"}  # T22bed_*: the bed face's viscosity at the bed's normal stress (BEDSTRESS)
 L0 = {"flat-glass-a0.5": 0.1, "flat-glass-a1": 0.1, "T22-A70": 0.2}
 #: the 1 % volume front is also read at these times (s): T22-A70 before any run reaches the box end
 FIXED_TIMES = (0.4, 0.8, 1.2)
@@ -90,7 +91,9 @@ def basilisk_run(runs: Path, name: str) -> tuple[dict, pd.DataFrame, pd.DataFram
                 cpu = float(p[p.index("cpu_user_s") + 1])
     at = {f"front_v99_t{tt:g}": float(ts.loc[np.argmin(np.abs(t - tt)), "front_v99"]) if t[-1] >= tt - 1e-9
           else float("nan") for tt in FIXED_TIMES}
-    row = {"case": case, "run": name, "variant": "pressure floor (diagnostic)" if "pf_" in name else "granular.h as is",
+    variant = ("pressure floor (diagnostic)" if "pf_" in name else
+               "bed face at the bed's normal stress (diagnostic)" if "bed_" in name else "granular.h as is")
+    row = {"case": case, "run": name, "variant": variant,
            "dx_m": dx, "cells": f"{nxc}x{nyc}", "status": status,
            "t_final_s": float(t[-1]), **final, "t_rest99": rest_time_from_share(t, stats[:, 2]),
            "volume_change": float(stats[-1, 1] / stats[0, 1] - 1.0),
@@ -130,6 +133,66 @@ def granudep_measures(nc: Path) -> tuple[dict, pd.DataFrame, tuple[np.ndarray, n
            "particles": int(ds.sizes["particle"]), "commit": str(ds.attrs.get("granudep_commit", "")),
            "granudep_final_front_v99": float(ds["final_front_v99"]), "granudep_final_front_5mm": float(ds["final_front_5mm"])}
     return row, tsd, (0.5 * (e[1:] + e[:-1]), d)
+
+
+def layer_runs(runs: Path) -> pd.DataFrame:
+    """The decelerating-layer runs (layer.c: ``layer_h{h}_dx{dx}`` as is, ``layerbed_*`` with the bed
+    face at the bed's normal stress): mean and basal speed every 0.01 s, for
+    ``benchmarks/decelerating_layer.py --basilisk``."""
+    out = []
+    for p in sorted(runs.glob("layer*_h*_dx*.stats")):
+        m = re.match(r"(layer|layerbed)_h([0-9.]+)_dx([0-9.]+)$", p.stem)
+        if not m:
+            continue
+        st = np.loadtxt(p, comments="#", ndmin=2)
+        if st.size == 0:
+            continue
+        out.append(pd.DataFrame({"run": p.stem, "variant": "granular.h as is" if m.group(1) == "layer" else
+                                 "bed face at the bed's normal stress", "h_mm": float(m.group(2)),
+                                 "dx_mm": float(m.group(3)), "t": st[:, 0], "mean_speed": st[:, 1],
+                                 "base_speed": st[:, 2]}))
+    return pd.concat(out, ignore_index=True) if out else pd.DataFrame()
+
+
+#: x bands (m) of the bed-contact table
+BANDS = ((0.0, 0.3), (0.3, 0.6), (0.6, 0.9), (0.9, 1.2), (1.2, 1.92))
+
+
+def bed_contact(runs: Path) -> pd.DataFrame:
+    """Does the granular layer touch the bed? From column.c's field dumps (``NAME.field_t{t}``: x, y,
+    f, u, v, p of every cell with f > 0.01): per x band, the mean volume fraction f of the bed cell
+    row under the columns holding grains (Σ f Δ > 2 mm), the share of those columns whose bed cell
+    holds less than half grains, and the share of the grain volume above such a bed cell."""
+    rows = []
+    for p in sorted(runs.glob("*.field_t*")):
+        name, tt = p.name.split(".field_t")
+        log = runs / f"{name}.log"
+        if not log.exists():
+            continue
+        dx = float(re.search(r"# dx = ([0-9.eE+-]+) m", log.read_text()).group(1))
+        F = np.loadtxt(p, ndmin=2)
+        if F.size == 0:
+            continue
+        i = np.round(F[:, 0] / dx - 0.5).astype(int)
+        j = np.round(F[:, 1] / dx - 0.5).astype(int)
+        ncol = int(i.max()) + 1
+        vol = np.zeros(ncol)
+        np.add.at(vol, i, F[:, 2] * dx)
+        fbed = np.zeros(ncol)
+        fbed[i[j == 0]] = F[j == 0, 2]
+        xc = (np.arange(ncol) + 0.5) * dx
+        occ = vol > 0.002
+        for a, b in BANDS + ((0.0, 1.92),):
+            sel = occ & (xc >= a) & (xc < b)
+            if not sel.any():
+                continue
+            off = sel & (fbed < 0.5)
+            rows.append({"run": name, "dx_m": dx, "t_s": float(tt), "x_from_m": a, "x_to_m": b,
+                         "columns": int(sel.sum()), "mean_bed_cell_f": float(fbed[sel].mean()),
+                         "share_columns_bed_f_below_0.5": float(off.sum() / sel.sum()),
+                         "share_volume_over_empty_bed": float(vol[off].sum() / vol[sel].sum()),
+                         "mean_thickness_m": float(vol[sel].mean())})
+    return pd.DataFrame(rows)
 
 
 def main() -> None:
@@ -175,6 +238,20 @@ def main() -> None:
     with open(a.out / "independent_basilisk_profiles.csv", "w") as fh:
         fh.write(head.replace("runs", "final deposit thickness (VOF sum f dx per column)"))
         pd.concat(profs).to_csv(fh, index=False, float_format="%.5g")
+    lay = layer_runs(a.runs)
+    if not lay.empty:
+        with open(a.out / "decelerating_layer_basilisk.csv", "w") as fh:
+            fh.write(head.replace("runs of granudep's cases with a no-slip bed and back wall (issue 25 item 1)",
+                                  "decelerating layers (layer.c; benchmarks/decelerating_layer.py)"))
+            lay.to_csv(fh, index=False, float_format="%.6g")
+    bc = bed_contact(a.runs)
+    if not bc.empty:
+        with open(a.out / "independent_basilisk_bed_contact.csv", "w") as fh:
+            fh.write(head.replace("runs of granudep's cases", "bed contact of the T22-A70 runs (field dumps)"))
+            bc.to_csv(fh, index=False, float_format="%.4g")
+        whole = bc[(bc.x_from_m == 0.0) & (bc.x_to_m == 1.92)]
+        print(whole[["run", "t_s", "columns", "mean_bed_cell_f", "share_columns_bed_f_below_0.5",
+                     "share_volume_over_empty_bed"]].to_string(index=False))
     cols = ["run", "dx_m", "status", "t_final_s", "front_2mm", "front_5mm", "front_v99", "t_rest99",
             "depth_x0.05", "depth_x0.1", "volume_change", "cpu_user_s"]
     with pd.option_context("display.width", 250, "display.max_columns", 30):

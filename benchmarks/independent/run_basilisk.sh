@@ -59,10 +59,27 @@ sed -e 's/    if (p\[\] > 0.) {/    double pe = f[] > 0.01 ? max(p[], pfloor_coe
     -e 's|eta\[\] = max((Co + muI\*p\[\])/D2, etamin);|eta[] = max((Co + muI*pe)/D2, etamin);|' \
     "$GH/granular.h" > "$SCRATCH/granular_pfloor.h"
 test "$(grep -c 'sqrt(pe)\|muI\*pe\|if (pe > 0.)' "$SCRATCH/granular_pfloor.h")" -ge 3 || { echo "granular_pfloor.h: sed did not apply" >&2; exit 1; }
+# diagnostic variant (session 13): the bed face's mu(I) viscosity at the bed's normal stress
+# (granudep's wall.bed_stress: bed): bed_stress_block.h inserted before granular.h's final boundary()
+"${PYTHON:-python}" - "$GH/granular.h" "$HERE/bed_stress_block.h" "$SCRATCH/granular_bed.h" <<'PYEOF'
+import sys
+src, block, out = open(sys.argv[1]).read(), open(sys.argv[2]).read(), sys.argv[3]
+anchor = "    boundary ({muv,alphav,rhov});\n}"
+if src.count(anchor) != 1:
+    sys.exit("granular_bed.h: the anchor of granular.h's properties event was not found")
+open(out, "w").write(src.replace(anchor, block + anchor))
+PYEOF
+cp "$HERE/layer.c" "$SCRATCH/layer.c"
 ( cd "$SCRATCH" && qcc -O2 -Wall -I"$SCRATCH" -I"$GH" column.c -o "$BIN.tmp" -lm 2> "$SCRATCH/compile_column.log" \
     && mv "$BIN.tmp" "$BIN" )   # (a running binary is never overwritten in place)
 ( cd "$SCRATCH" && qcc -O2 -Wall -DPFLOOR -I"$SCRATCH" -I"$GH" column.c -o "$SCRATCH/column_pfloor.tmp" -lm \
     2> "$SCRATCH/compile_column_pfloor.log" && mv "$SCRATCH/column_pfloor.tmp" "$SCRATCH/column_pfloor" )
+( cd "$SCRATCH" && qcc -O2 -Wall -DBEDSTRESS -I"$SCRATCH" -I"$GH" column.c -o "$SCRATCH/column_bed.tmp" -lm \
+    2> "$SCRATCH/compile_column_bed.log" && mv "$SCRATCH/column_bed.tmp" "$SCRATCH/column_bed" )
+( cd "$SCRATCH" && qcc -O2 -Wall -I"$SCRATCH" -I"$GH" layer.c -o "$SCRATCH/layer.tmp" -lm \
+    2> "$SCRATCH/compile_layer.log" && mv "$SCRATCH/layer.tmp" "$SCRATCH/layer" )
+( cd "$SCRATCH" && qcc -O2 -Wall -DBEDSTRESS -I"$SCRATCH" -I"$GH" layer.c -o "$SCRATCH/layer_bed.tmp" -lm \
+    2> "$SCRATCH/compile_layer_bed.log" && mv "$SCRATCH/layer_bed.tmp" "$SCRATCH/layer_bed" )
 
 # --- 4. granudep's material (Table 2 glass beads, as load_config('T22-A70') resolves it) -------
 PY="${PYTHON:-python}"
@@ -94,6 +111,15 @@ ALL=(
   "T22_3.33 22 0.2 0.14 0.053333333333 36 3 4 3.722"
   "T22pf_10   22 0.2 0.14 0.16 12 1 4 3.722"
   "T22pf_6.67 22 0.2 0.14 0.053333333333 36 3 3 3.722"
+  "T22bed_5    22 0.2 0.14 0.16 12 1 5 3.722"
+  "T22bed_3.33 22 0.2 0.14 0.053333333333 36 3 4 3.722"
+)
+# decelerating layers (session 13; benchmarks/decelerating_layer.py): name h(m) dx(m), 22 deg,
+# Bagnold-shaped start at 1 m/s, 1.2 s; "layerbed_*" with the bed face at the bed's normal stress
+LAYERS=(
+  "layer_h4_dx2 0.004 0.002"   "layer_h6_dx2 0.006 0.002"   "layer_h10_dx2 0.01 0.002"  "layer_h20_dx2 0.02 0.002"
+  "layer_h4_dx1 0.004 0.001"   "layer_h6_dx1 0.006 0.001"   "layer_h10_dx1 0.01 0.001"  "layer_h20_dx1 0.02 0.001"
+  "layer_h4_dx0.5 0.004 0.0005" "layer_h6_dx0.5 0.006 0.0005" "layer_h10_dx0.5 0.01 0.0005"
 )
 SEL="${CASES:-}"
 for spec in "${ALL[@]}"; do
@@ -101,9 +127,22 @@ for spec in "${ALL[@]}"; do
   if [ -n "$SEL" ] && [[ " $SEL " != *" $name "* ]]; then continue; fi
   echo "$(date -u +%FT%TZ) run $name" | tee -a "$SCRATCH/runs/provenance.txt"
   exe="$BIN"; [[ "$name" == *pf_* ]] && exe="$SCRATCH/column_pfloor"   # diagnostic runs
+  [[ "$name" == T22bed_* ]] && exe="$SCRATCH/column_bed"
   ( cd "$SCRATCH/runs" && /usr/bin/env time -f "$name cpu_user_s %U wall_s %e" -a -o cpu_times.txt \
       nice -n "$NICE" "$exe" "$th" "$l0" "$h0" "$blk" "$nx" "$ny" "$lev" "$tend" \
       "$DEFF" "$MUS" "$DMU" "$I0" "$ETAMAX" "$RHO" "$name" > "$name.log" 2>&1 )
+done
+
+for spec in "${LAYERS[@]}"; do
+  read -r name h dl <<< "$spec"
+  for variant in layer layerbed; do
+    run="${name/layer/$variant}"
+    if [ -n "$SEL" ] && [[ " $SEL " != *" $run "* ]] && [[ " $SEL " != *" layers "* ]]; then continue; fi
+    exe="$SCRATCH/layer"; [ "$variant" = layerbed ] && exe="$SCRATCH/layer_bed"
+    ( cd "$SCRATCH/runs" && /usr/bin/env time -f "$run cpu_user_s %U wall_s %e" -a -o cpu_times.txt \
+        nice -n "$NICE" "$exe" 22 "$h" "$dl" 1.0 1.2 "$DEFF" "$MUS" "$DMU" "$I0" "$ETAMAX" "$RHO" "$run" \
+        > "$run.log" 2>&1 )
+  done
 done
 
 # --- 6. measures -> docs/data/independent_basilisk*.csv ----------------------------------------

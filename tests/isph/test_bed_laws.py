@@ -134,7 +134,7 @@ def test_friction_laws_need_the_wall_reaction():
 
 
 @pytest.mark.parametrize("law, bed_stress", [("mu_w_i", "bed"), ("stress_limited", "bed"), ("no_slip", "bed"),
-                                             ("no_slip", "hydrostatic")])
+                                             ("no_slip", "hydrostatic"), ("no_slip", "wall")])
 def test_bed_laws_never_create_energy_on_a_collapse(law, bed_stress):
     from granudep.isph.api import run_isph
     ds = run_isph("T22-A70", progress=False, dx=0.008, t_end=0.6, **{"wall.slip": law, "wall.bed_stress": bed_stress})

@@ -25,6 +25,33 @@ def test_coulomb_wall_friction_decelerates_sliding_layer_at_analytic_rate():
     _assert_rows(v.sliding_block(quick=True))
 
 
+def test_decelerating_layer_follows_the_1d_reference():
+    # a 20 mm layer (10 particles) launched at 1 m/s on 22 deg below mu_s: mean speed within 0.03 m/s
+    # of the converged 1D finite-volume solution over t <= 1 s (session 13: 0.027 m/s)
+    rows = v.decelerating_layer(quick=True)
+    assert len(rows) == 1
+    _assert_rows(rows)
+
+
+def test_wall_stress_option_follows_the_1d_reference_on_a_thick_layer():
+    # bed_stress = wall (the mu(I) law at the wall's own p_w and shear rate): 10 particles across,
+    # within the same 0.03 m/s of the converged 1D solution (session 13: 0.014 m/s, bed 0.027)
+    from granudep.isph.layer_reference import uniform_layer
+    ref = uniform_layer(0.02, 22.0, 1.0, n_cells=20, t_end=1.0, dt=1.0e-3, out_every=0.05)
+    t, m = v.decelerating_layer_history(0.02, 0.002, bed_stress="wall", t_end=1.0)
+    err = np.max(np.abs(m - np.interp(t, ref.t, ref.mean_speed)))
+    assert err < 0.03
+    assert m[-1] < 0.05 and np.all(np.diff(m) < 1e-3)  # it decelerates and (nearly) stops
+
+
+@pytest.mark.slow
+def test_decelerating_layer_fine_and_thin_sheets_reported():
+    rows = v.decelerating_layer(quick=False)
+    _assert_rows(rows)
+    thin = [r for r in rows if not np.isfinite(r["tolerance"])]
+    assert len(thin) == 2 and all(np.isfinite(r["value"]) for r in thin)
+
+
 @pytest.mark.slow
 def test_hydrostatic_and_poiseuille_fine():
     _assert_rows(v.hydrostatic(quick=False) + v.film_flow(quick=False))

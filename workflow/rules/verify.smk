@@ -26,7 +26,7 @@ rule verify_da:
 # The ISPH suite in three parts that -j2 runs side by side (the Bagnold layers take most of the
 # time), merged in table order.
 VERIFY_ISPH_PARTS = {
-    "steady": "hydrostatic,film_flow,sliding_block",
+    "steady": "hydrostatic,film_flow,sliding_block,decelerating_layer",
     "bagnold": "bagnold",
     "transient": "dam_break,dam_break_approximate,collapse_t22a70",
 }

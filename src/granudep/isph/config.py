@@ -114,14 +114,16 @@ class Wall:
                                                 "(one grain: the slip is the shear of the basal grain layer)")
     phi_basal_deg: float = param(_GB["phi_internal_deg"], gt=0.0, lt=90.0, unit="deg", was="phi_wall_deg",
                                  doc="Coulomb wall friction angle phi_B (slip = coulomb, stress_limited)")
-    bed_stress: str = param("bed", choices=("bed", "centre", "hydrostatic"),
+    bed_stress: str = param("bed", choices=("bed", "centre", "hydrostatic", "wall"),
                             doc="slip = no_slip, navier with mu(I): the viscous wall stress of the first layer at "
                                 "the bed's normal stress (bed: eta_i p_w/p_i, p_w = rho a_n dx from the walls' "
                                 "reaction, never below p_i) or at the particle centre (centre: sessions 1-11; a sheet "
                                 "one particle thick holds half its weight and slides on). The bed stress needs the "
                                 "walls' reaction (numerics.projection: adjoint_pair); with the approximate projection "
                                 "the centre stress is used. hydrostatic: the first layer's pressure extrapolated to "
-                                "the wall, p_i + rho g_n d_i (session 12 diagnostic, not the default)")
+                                "the wall, p_i + rho g_n d_i (session 12 diagnostic, not the default). wall: mu(I) evaluated "
+                                "at the wall itself, p_w = rho a_n dx and the wall's own shear rate rho dx (k_i/eta_i) "
+                                "|u_t| (session 13; best on layers >= 10 particles, no better on 2-4-particle sheets)")
     stick_speed: float = param(1.0e-4, gt=0.0, unit="m s-1",
                                doc="Coulomb regularisation: below this tangential speed the wall friction is a stiff drag")
     contact_length: str = param("voronoi", choices=("voronoi", "dx"),

@@ -394,6 +394,20 @@ class IsphSolver:
                 # layer's centre pressure (a sheet one particle thick held half its weight and slid on)
                 pw = rho * self.wall_an * self.dx
                 scale = np.where(self.wall_an > 0.0, np.maximum(pw / np.maximum(self.p_rheo, 1e-300)[:, None], 1.0), 1.0)
+            elif (c.wall.bed_stress == "wall" and c.rheology.model == "mu_i" and self.reaction_friction
+                    and self.wall_an is not None and self.wall_an.shape[0] == nf):
+                # the μ(I) stress evaluated at the wall itself: its normal stress p_w = ρ a_n dx and
+                # its own shear rate γ̇_w = τ_w/η = ρ dx (k_i/η_i) |u_t| (the wall term's geometry),
+                # so that τ_w = min(μ(I_w) p_w, η_max γ̇_w) whatever the particle's own strain rate
+                m, rh = c.material, c.rheology
+                pw = rho * self.wall_an * self.dx
+                eta_i = np.maximum(self.eta[:nf], 1e-300)[:, None]
+                ut = np.abs(np.outer(self.u[:nf], self.planes[:, 1]) - np.outer(self.v[:nf], self.planes[:, 0]))
+                gw = rho * self.dx * (kns / eta_i) * ut
+                iw = gw * m.d / np.sqrt(np.maximum(pw, 1e-300) / m.rho_s)
+                muw = m.mu_s + (m.mu_2 - m.mu_s) * iw / (m.I0 + iw)
+                eta_w = np.where(gw > 0.0, np.clip(muw * pw / np.maximum(gw, 1e-300), rh.eta_min, rh.eta_max), rh.eta_max)
+                scale = np.where((self.wall_an > 0.0) & (kns > 0.0), eta_w / eta_i, 1.0)
             elif c.wall.bed_stress == "hydrostatic" and c.rheology.model == "mu_i":
                 # the first layer's pressure extrapolated to the wall plane, p_w = p_i + ρ g_n d_i
                 # (d_i: the particle's distance to the plane, g_n = max(−g·n, 0)): smooth in time
