@@ -221,14 +221,24 @@ def main() -> None:
         rows.append(row)
         tss.append(ts.assign(run=name))
         profs.append(pr)
-    if not rows:
-        raise SystemExit(f"no runs in {a.runs}")
-    df = pd.DataFrame(rows).sort_values(["case", "dx_m"], ascending=[True, False])
-    for c in ("front_2mm", "front_5mm", "front_v99", "front_2d"):
-        df[f"{c}_dL_over_L0"] = [(v - L0[cs]) / L0[cs] for v, cs in zip(df[c], df["case"])]
     a.out.mkdir(parents=True, exist_ok=True)
     head = ("# Basilisk + granular.h (P.-Y. Lagree) runs of granudep's cases with a no-slip bed and back wall "
             f"(issue 25 item 1); written {date} by benchmarks/independent/measures.py; lengths m, times s\n")
+    lay = layer_runs(a.runs)
+    if not lay.empty:
+        with open(a.out / "decelerating_layer_basilisk.csv", "w") as fh:
+            fh.write(head.replace("runs of granudep's cases with a no-slip bed and back wall (issue 25 item 1)",
+                                  "decelerating layers (layer.c; benchmarks/decelerating_layer.py)"))
+            lay.to_csv(fh, index=False, float_format="%.6g")
+        print(f"decelerating layers: {lay.run.nunique()} runs -> {a.out / 'decelerating_layer_basilisk.csv'}")
+    if not rows:
+        # a layers-only folder (CASES="layers"): the column tables are left as they are
+        if lay.empty:
+            raise SystemExit(f"no runs in {a.runs}")
+        return
+    df = pd.DataFrame(rows).sort_values(["case", "dx_m"], ascending=[True, False])
+    for c in ("front_2mm", "front_5mm", "front_v99", "front_2d"):
+        df[f"{c}_dL_over_L0"] = [(v - L0[cs]) / L0[cs] for v, cs in zip(df[c], df["case"])]
     with open(a.out / "independent_basilisk.csv", "w") as fh:
         fh.write(head)
         df.to_csv(fh, index=False, float_format="%.6g")
@@ -238,12 +248,6 @@ def main() -> None:
     with open(a.out / "independent_basilisk_profiles.csv", "w") as fh:
         fh.write(head.replace("runs", "final deposit thickness (VOF sum f dx per column)"))
         pd.concat(profs).to_csv(fh, index=False, float_format="%.5g")
-    lay = layer_runs(a.runs)
-    if not lay.empty:
-        with open(a.out / "decelerating_layer_basilisk.csv", "w") as fh:
-            fh.write(head.replace("runs of granudep's cases with a no-slip bed and back wall (issue 25 item 1)",
-                                  "decelerating layers (layer.c; benchmarks/decelerating_layer.py)"))
-            lay.to_csv(fh, index=False, float_format="%.6g")
     bc = bed_contact(a.runs)
     if not bc.empty:
         with open(a.out / "independent_basilisk_bed_contact.csv", "w") as fh:

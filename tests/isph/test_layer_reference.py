@@ -52,3 +52,16 @@ def test_layer_below_static_friction_stops_and_converges():
 def test_bad_input_is_refused():
     with pytest.raises(ValueError, match="h > 0"):
         lr.uniform_layer(-0.01, 22.0)
+
+
+def test_viscosity_floor_brakes_thin_sheets_only():
+    # granular.h's floor rho D sqrt(g D) = 0.129 Pa s exceeds the mu(I) viscosity of a 4 mm sheet at
+    # 1 m/s (it stops at 0.37 s instead of 0.585 s) and does nothing to a 20 mm layer
+    floor = lr.LayerMaterial(eta_min=0.129)
+    assert lr.face_viscosity(np.array([1e4]), np.array([10.0]), floor)[0] == pytest.approx(0.129)
+    thin = lr.uniform_layer(0.004, 22.0, 1.0, n_cells=20, t_end=0.8, dt=1e-3)
+    thin_f = lr.uniform_layer(0.004, 22.0, 1.0, n_cells=20, t_end=0.8, dt=1e-3, mat=floor)
+    assert thin_f.t_stop < 0.8 * thin.t_stop
+    thick = lr.uniform_layer(0.02, 22.0, 1.0, n_cells=20, t_end=0.6, dt=1e-3)
+    thick_f = lr.uniform_layer(0.02, 22.0, 1.0, n_cells=20, t_end=0.6, dt=1e-3, mat=floor)
+    assert np.max(np.abs(thick.mean_speed - thick_f.mean_speed)) < 2e-3

@@ -36,6 +36,9 @@ class LayerMaterial:
     mu_2: float = 0.73
     i0: float = 0.279
     eta_max: float = 5.0e3
+    #: viscosity floor (Pa s); 0 as in the 2D solver (whose 1e-3 Pa s floor never acts here). Basilisk's
+    #: granular.h floors η at ρ D sqrt(g D) = 0.13 Pa s: set it to read its thin layers (session 14)
+    eta_min: float = 0.0
 
     @classmethod
     def from_config(cls, cfg) -> "LayerMaterial":
@@ -54,7 +57,7 @@ def face_viscosity(gdot: np.ndarray, p: np.ndarray, mat: LayerMaterial) -> np.nd
     ag = np.maximum(np.abs(gdot), 1e-12)
     inert = mat.d * ag / np.sqrt(np.maximum(p, 1e-300) / mat.rho_s)
     mu = mat.mu_s + (mat.mu_2 - mat.mu_s) * inert / (mat.i0 + inert)
-    return np.minimum(mu * p / ag, mat.eta_max)
+    return np.clip(mu * p / ag, mat.eta_min, mat.eta_max)
 
 
 def face_shear_rate(u: np.ndarray, dy: float) -> np.ndarray:
