@@ -79,12 +79,13 @@ def summarise(code: str, variant: str, h: float, dx: float, hist: pd.DataFrame, 
 def figure(df: pd.DataFrame, refs: dict, path: str) -> None:
     import matplotlib
     matplotlib.use("Agg")
+    import matplotlib.ticker  # noqa: F401
     import matplotlib.pyplot as plt
 
     hs = sorted(df.h_mm.unique())
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
     ax = axes[0]
-    own = (df.code != "Basilisk") | df.reference.astype(str).str.contains("floor")
+    own = (df.code != "Basilisk") | df.reference.astype(str).str.contains("granular.h's floor")
     for code_var, g in df[own].groupby(["code", "variant"], sort=False):
         for dxv, mk in zip(sorted(g.dx_mm.unique(), reverse=True), ("o", "s", "^", "v")):
             gg = g[g.dx_mm == dxv].sort_values("layers")
@@ -92,6 +93,10 @@ def figure(df: pd.DataFrame, refs: dict, path: str) -> None:
             ax.plot(gg.layers, gg.max_err, mk + ("--" if code_var[0] == "Basilisk" else "-"), label=lab, ms=4)
     ax.set_xscale("log")
     ax.set_yscale("log")
+    ticks = [2, 3, 4, 5, 6, 8, 10, 20, 40]
+    ax.set_xticks(ticks)
+    ax.set_xticklabels([str(t) for t in ticks])
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.set_xlabel("layer thickness / dx (particles or cells across the layer)")
     ax.set_ylabel("max |ū − ū_ref| over t ≤ 1 s (m/s; launch 1 m/s)")
     ax.grid(alpha=0.3, which="both")
@@ -101,7 +106,10 @@ def figure(df: pd.DataFrame, refs: dict, path: str) -> None:
         if h in refs:
             rf = refs[h]
             ax.plot(rf.t, rf.mean_speed, "k-", lw=2 if k == 0 else 1)
-            ax.text(float(rf.t.iloc[2]), float(rf.mean_speed.iloc[2]), f"ref h = {h:g} mm", fontsize=7)
+            ms = rf.mean_speed.to_numpy()
+            mid = int(np.argmin(np.abs(ms - 0.1 * (k + 1))))
+            ax.annotate(f"h = {h:g} mm", (float(rf.t.iloc[mid]), float(ms[mid])), xytext=(8, 4),
+                        textcoords="offset points", fontsize=7)
         if (h, "floor") in refs:
             rf = refs[(h, "floor")]
             ax.plot(rf.t, rf.mean_speed, "k--", lw=0.8, label="with granular.h's η floor" if k == 0 else None)
@@ -170,6 +178,9 @@ def main(argv=None) -> int:
                 rows.append(summarise("Basilisk", variant, h * 1e-3, dxx * 1e-3, hist, ref, ts_ref, math.nan))
     if a.from_csv:
         df = pd.read_csv(a.from_csv)
+        if (df.code == "Basilisk").any():
+            for h in a.heights:
+                refs[(h, "floor")] = reference(h * 1e-3, basilisk_eta_min())[0]
     else:
         df = pd.DataFrame(rows)
         Path(a.output).parent.mkdir(parents=True, exist_ok=True)
