@@ -642,11 +642,7 @@ def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unkn
             ccy[u] = vy
     diag = np.empty(m)
     up = np.zeros(m + 1, np.int64)
-    # the row's accumulator is dense, indexed by column (zero between rows), with a mark per column:
-    # one dependent load per multiply-add instead of two through a slot map (issue 26: the upper
-    # product 6.2 -> 4.9 ms at 3750 particles; the same additions in the same order, bit for bit)
-    accd = np.zeros(m)
-    mark = np.zeros(m, np.uint8)
+    slot = np.full(m, -1, np.int32)
     # bounds: a row meets at most the entries of its particles' columns and its L_c row
     total = 0
     cap = 1
@@ -656,7 +652,8 @@ def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unkn
             e += cptr[rcol[k] + 1] - cptr[rcol[k]]
         total += e
         cap = max(cap, e)
-    lst = np.empty(cap, np.int64)
+    lst = np.empty(cap, np.int32)
+    acc = np.empty(cap)
     ui = np.empty(max(1, total // 2 + m), np.uint32)
     uv = np.empty(ui.size)
     pos = 0
@@ -668,33 +665,35 @@ def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unkn
             ax = rx[k]
             ay = ry[k]
             d += ax * ax + ay * ay
-            t0 = cptr[i]
             t = cptr[i + 1] - 1
-            while t >= t0:
+            while t >= cptr[i] and crow[t] > a:
                 c = crow[t]
-                if c <= a:
-                    break
-                if mark[c] == 0:
-                    mark[c] = 1
+                s = slot[c]
+                if s < 0:
+                    s = cnt
+                    slot[c] = cnt
                     lst[cnt] = c
+                    acc[cnt] = 0.0
                     cnt += 1
-                accd[c] += wd * (ax * ccx[t] + ay * ccy[t])
+                acc[s] += wd * (ax * ccx[t] + ay * ccy[t])
                 t -= 1
         diag[a] = wd * d + lval[lptr[a]]
         for k in range(lptr[a] + 1, lptr[a + 1]):
             c = lcol[k]
             if c > a:
-                if mark[c] == 0:
-                    mark[c] = 1
+                s = slot[c]
+                if s < 0:
+                    s = cnt
+                    slot[c] = cnt
                     lst[cnt] = c
+                    acc[cnt] = 0.0
                     cnt += 1
-                accd[c] += lval[k]
+                acc[s] += lval[k]
         for t in range(cnt):            # in the order met (sorted by the transpositions below)
             c = lst[t]
+            slot[c] = -1
             ui[pos + t] = c
-            uv[pos + t] = accd[c]
-            accd[c] = 0.0
-            mark[c] = 0
+            uv[pos + t] = acc[t]
         pos += cnt
         up[a + 1] = pos
     # the lower triangle: the transpose (rows visited in ascending order: each lower row by ascending
