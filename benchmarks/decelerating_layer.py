@@ -12,8 +12,10 @@ below μ_s = tan 25.5° = 0.477, so the layer decelerates and stops (the regime 
 Reference: :func:`granudep.isph.layer_reference.uniform_layer` (1D finite volumes, 40 cells, converged
 to 4 digits; the bed stress at the bed's normal stress and shear rate). granudep: the 2D ISPH solver
 with ``wall.slip: no_slip`` and each ``wall.bed_stress``. Basilisk (optional, ``--basilisk``):
-``benchmarks/independent/run_basilisk.sh`` with ``CASES`` of its layer runs (granular.h as is, and
-with the bed face's viscosity at the bed's normal stress).
+``benchmarks/independent/run_basilisk.sh`` with ``CASES="layers"`` (granular.h as is, and with the bed
+face's viscosity at the bed's normal stress), read against the reference with granular.h's viscosity
+floor ρ D sqrt(g D) = 0.129 Pa s (``LayerMaterial.eta_min``; it brakes 4–6 mm sheets, a model
+difference) and, in a second row each, against the plain one.
 
 Measures per run: the mean speed at 0.1, 0.2, 0.3, 0.5 s; the stop time (mean speed < 0.01 m/s,
 0.05 s output resolution); ``max_err``: the largest |ū − ū_ref| over t ≤ 1 s (m/s, on a launch speed
