@@ -642,7 +642,14 @@ def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unkn
             ccy[u] = vy
     diag = np.empty(m)
     up = np.zeros(m + 1, np.int64)
-    slot = np.full(m, -1, np.int32)
+    # a dense accumulator over the unknowns, zero between rows, and the row's distinct columns
+    # listed without a branch (``mark[c] == a`` once c is listed for row a): one dependent load per
+    # multiply-add instead of the slot map's two, no unpredictable first-visit branch (session 15)
+    mark = np.full(m, -1, np.int64)
+    acc = np.zeros(m)
+    # the part of column i below the diagonal of row a starts at head[i]: rows ascend, so the head
+    # only moves forward (instead of scanning each column from its end)
+    head = cptr[:-1].copy()
     # bounds: a row meets at most the entries of its particles' columns and its L_c row
     total = 0
     cap = 1
@@ -652,8 +659,7 @@ def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unkn
             e += cptr[rcol[k] + 1] - cptr[rcol[k]]
         total += e
         cap = max(cap, e)
-    lst = np.empty(cap, np.int32)
-    acc = np.empty(cap)
+    lst = np.empty(cap + 1, np.int32)
     ui = np.empty(max(1, total // 2 + m), np.uint32)
     uv = np.empty(ui.size)
     pos = 0
@@ -665,35 +671,30 @@ def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unkn
             ax = rx[k]
             ay = ry[k]
             d += ax * ax + ay * ay
-            t = cptr[i + 1] - 1
-            while t >= cptr[i] and crow[t] > a:
+            t0 = head[i]
+            t1 = cptr[i + 1]
+            while t0 < t1 and crow[t0] <= a:
+                t0 += 1
+            head[i] = t0
+            for t in range(t0, t1):
                 c = crow[t]
-                s = slot[c]
-                if s < 0:
-                    s = cnt
-                    slot[c] = cnt
-                    lst[cnt] = c
-                    acc[cnt] = 0.0
-                    cnt += 1
-                acc[s] += wd * (ax * ccx[t] + ay * ccy[t])
-                t -= 1
+                lst[cnt] = c
+                cnt += mark[c] != a
+                mark[c] = a
+                acc[c] += wd * (ax * ccx[t] + ay * ccy[t])
         diag[a] = wd * d + lval[lptr[a]]
         for k in range(lptr[a] + 1, lptr[a + 1]):
             c = lcol[k]
             if c > a:
-                s = slot[c]
-                if s < 0:
-                    s = cnt
-                    slot[c] = cnt
-                    lst[cnt] = c
-                    acc[cnt] = 0.0
-                    cnt += 1
-                acc[s] += lval[k]
+                lst[cnt] = c
+                cnt += mark[c] != a
+                mark[c] = a
+                acc[c] += lval[k]
         for t in range(cnt):            # in the order met (sorted by the transpositions below)
             c = lst[t]
-            slot[c] = -1
             ui[pos + t] = c
-            uv[pos + t] = acc[t]
+            uv[pos + t] = acc[c]
+            acc[c] = 0.0
         pos += cnt
         up[a + 1] = pos
     # the lower triangle: the transpose (rows visited in ascending order: each lower row by ascending
@@ -720,4 +721,4 @@ def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unkn
             ui[fill[a]] = c
             uv[fill[a]] = lv[k]
             fill[a] += 1
-    return (lp.astype(np.uint64), li, lv, up.astype(np.uint64), ui[:pos].copy(), uv[:pos].copy(), diag), rhs
+    return (lp.astype(np.uint64), li, lv, up.astype(np.uint64), ui[:pos], uv[:pos], diag), rhs
