@@ -45,6 +45,7 @@ from .linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, 
                        pcg_two_level_free, pcg_dic_split,
                        pin_blas_to_one_thread)
 from .bundles import Pairs, WallSurface, pairs_of
+from .heap import keep_freed_memory
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
                     reference_laplacian_sum)
 
@@ -122,6 +123,7 @@ class IsphSolver:
 
     def __init__(self, cfg: IsphConfig, particles: Particles | None = None):
         pin_blas_to_one_thread()
+        keep_freed_memory()
         self.cfg = cfg
         c = cfg
         if c.numerics.pressure_solver.startswith("amg_"):
@@ -925,6 +927,7 @@ def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, sol
     """
     out = cfg.output
     pin_blas_to_one_thread()     # also for a solver unpickled from a checkpoint (no __init__)
+    keep_freed_memory()
     st = checkpoint.resume() if checkpoint is not None else None
     resumed = st is not None
     if st is None:
