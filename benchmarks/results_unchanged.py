@@ -1,11 +1,11 @@
 """Are the outputs of this checkout bit for bit those of another revision? (issue 15: structure and
 numerics in separate commits, the ISPH and DA outputs unchanged by each structural step)
 
-    python benchmarks/results_unchanged.py [--base main] [--dx 0.008] [--keep DIR]
+    python benchmarks/results_unchanged.py [--base main] [--dx 0.008] [--keep DIR] [--threads 1]
 
 Runs T22-A70 (2D ISPH at --dx, to rest) and 1D-A70 (DA, with and without deposition) twice, with
 this working tree and with --base's src/ (``git archive`` into a temporary folder), each in its own
-process on one numba thread with its own numba cache, and compares every data variable and
+process on one numba thread (``--threads``) with its own numba cache, and compares every data variable and
 coordinate value for value (NaN equal to NaN). Prints the differing arrays and exits 1 when any
 differs, 0 when all agree. Both runs are made on this machine: OpenBLAS's kernels (np.dot in the
 ISPH CG) depend on the CPU, so stored digests would not be comparable across machines.
@@ -41,8 +41,8 @@ print(granudep.__file__, len(arrays), "arrays;", "T22-A70", ds.attrs["status"])
 """
 
 
-def _run(src: Path, dx: float, out: Path, cache: Path) -> None:
-    env = {**os.environ, "PYTHONPATH": str(src), "NUMBA_NUM_THREADS": "1", "NUMBA_CACHE_DIR": str(cache),
+def _run(src: Path, dx: float, out: Path, cache: Path, threads: int = 1) -> None:
+    env = {**os.environ, "PYTHONPATH": str(src), "NUMBA_NUM_THREADS": str(threads), "NUMBA_CACHE_DIR": str(cache),
            "PYTHONDONTWRITEBYTECODE": "1"}
     subprocess.run([sys.executable, "-c", RUNNER, str(dx), str(out)], env=env, check=True, cwd=src.parent)
 
@@ -64,6 +64,9 @@ def main() -> int:
     ap.add_argument("--base", default="main", help="revision to compare with (default main)")
     ap.add_argument("--dx", type=float, default=0.008, help="2D particle spacing, m (default 0.008)")
     ap.add_argument("--keep", metavar="DIR", help="keep the two .npz files in DIR")
+    ap.add_argument("--threads", type=int, default=1,
+                    help="NUMBA_NUM_THREADS of both runs (default 1; 2 exercises the parallel builds and the "
+                         "PPE geometry built beside the predictor)")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="granudep-unchanged-") as tmp:
         tmp = Path(tmp)
@@ -75,8 +78,8 @@ def main() -> int:
         keep = Path(args.keep) if args.keep else tmp
         keep.mkdir(parents=True, exist_ok=True)
         files = {"base": keep / "base.npz", "tree": keep / "tree.npz"}
-        _run(base / "src", args.dx, files["base"], tmp / "cache_base")
-        _run(ROOT / "src", args.dx, files["tree"], tmp / "cache_tree")
+        _run(base / "src", args.dx, files["base"], tmp / "cache_base", args.threads)
+        _run(ROOT / "src", args.dx, files["tree"], tmp / "cache_tree", args.threads)
         diff = _differences(files["base"], files["tree"])
     if diff:
         print(f"outputs differ from {args.base}:\n  " + "\n  ".join(diff))
