@@ -8,7 +8,7 @@ the fitted exponent of cost/step vs N; the peak RSS; optionally T22-A70 to rest 
 Each variant also prints the parts of its step (issue 26: PPE assembly, PPE CG, viscous assembly,
 viscous CG, the rest) and the issue-26 targets (printed, never asserted): <= 10 ms/step at 3750
 particles on one thread, and T22-A70 at 1 mm to rest <= 20 min estimated from ms/step at 28 000
-particles (power law between the measured N) x 13 877 steps. A variant is a
+particles (power law between the measured N) x 6109 steps (the no-slip bed's run to rest). A variant is a
 numerics.pressure_solver value, optionally /numerics.ppe_operator (cg_dic/matrix_free).
 
 Run (one command per figure set):
@@ -248,14 +248,16 @@ def per_step(args) -> None:
     print(f"peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
 
 
-#: T22-A70 at dx = 1 mm: particles and steps to rest (session 10's run, README "A 1 mm rung")
-N_1MM, STEPS_1MM = 28_000, 13_877
+#: T22-A70 at dx = 1 mm: particles and steps to rest with the default (no-slip) bed, measured in
+#: session 15 (`--to-rest 1`: at rest at 12.57 t_c after 6109 steps, 1757 s on one thread). Session
+#: 10's Coulomb-bed run needed 13 877 steps (README "A 1 mm rung").
+N_1MM, STEPS_1MM = 28_000, 6_109
 
 
 def print_targets(solver: str, ns, ts, cpus=None) -> None:
     """Issue 26's targets (printed, never asserted): <= 10 ms/step at 3750 particles on one thread;
     T22-A70 at 1 mm to rest <= 20 min, estimated as ms/step at 28 000 particles (the power law
-    through the two nearest measured N) times 13 877 steps. Each from the wall time and, on a
+    through the two nearest measured N) times 6109 steps (``STEPS_1MM``). Each from the wall time and, on a
     loaded machine the better guess of an idle core, from the process CPU time (``cpus``)."""
     threads = os.environ.get("NUMBA_NUM_THREADS", "(unset)")
     for label, vals in (("wall", ts), ("CPU", cpus)):
