@@ -65,8 +65,7 @@ def main() -> int:
     ap.add_argument("--dx", type=float, default=0.008, help="2D particle spacing, m (default 0.008)")
     ap.add_argument("--keep", metavar="DIR", help="keep the two .npz files in DIR")
     ap.add_argument("--threads", type=int, default=1,
-                    help="NUMBA_NUM_THREADS of both runs (default 1; 2 exercises the parallel builds and the "
-                         "PPE geometry built beside the predictor)")
+                    help="NUMBA_NUM_THREADS of both runs (default 1; 2 exercises the parallel builds)")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="granudep-unchanged-") as tmp:
         tmp = Path(tmp)

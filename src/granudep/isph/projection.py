@@ -618,7 +618,8 @@ def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unkn
     the SSOR-preconditioned CG (``numerics.pressure_solver: cg_ssor``, :func:`linsolve.pcg_dic_split`).
 
     Only the upper triangle is computed (the product is symmetric): row a takes, for each particle
-    i of its D_U row, the nodes b > a of column i (the columns sorted by node, scanned from the end),
+    i of its D_U row, the nodes b > a of column i (the columns sorted by node, each entered at a head that
+    only moves forward as a grows),
     plus its L_c entries b > a; the lower triangle is its transpose. Half the multiply-adds of the
     row-by-row product and no CSR to split. Returns (lp, li, lv, up, ui, uv, diag, rhs)."""
     op, rhs = _matrix_free_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b)
