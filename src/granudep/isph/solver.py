@@ -41,6 +41,7 @@ from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
 from .projection import (adjoint_divergence, adjoint_pair_projection, apply_gradient, divergence_entries,
                          wall_normal_acceleration)
+from .deflation import pcg_ssor_deflated
 from .linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pcg_two_level,
                        pcg_two_level_free, pcg_dic_split,
                        pin_blas_to_one_thread)
@@ -648,10 +649,13 @@ class IsphSolver:
 
     def _solve_ppe_free(self, op, rhs, guess, assemble):
         """The adjoint-pair PPE as a matrix-free operator (two-level CG) or as its two triangles
-        (SSOR-CG); the assembled matrix by SuperLU if it fails (:meth:`_solve_cg`)."""
+        (SSOR-CG, deflated by an aggregation coarse space from ``numerics.deflation_min_unknowns``
+        unknowns on: :mod:`.deflation`); the assembled matrix by SuperLU if it fails (:meth:`_solve_cg`)."""
         rtol = self.cfg.numerics.solver_rtol
         try:
-            if len(op) == 7:
+            if len(op) == 7 and rhs.size >= self.cfg.numerics.deflation_min_unknowns:
+                sol, it, info = pcg_ssor_deflated(*op, rhs, guess, rtol, 0.0, 1000)
+            elif len(op) == 7:
                 sol, it, info = pcg_dic_split(*op, rhs, guess, rtol, 0.0, 1000, -1.0)
             else:
                 sol, it, info = pcg_two_level_free(op, rhs, guess, rtol, 0.0, 1000)

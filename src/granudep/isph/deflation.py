@@ -1,0 +1,315 @@
+"""SSOR-CG with an aggregation deflation space for the adjoint-pair PPE (issue 26).
+
+The SSOR-preconditioned CG (:func:`linsolve.pcg_dic_split`, symmetric Gauss-Seidel in the Eisenstat
+form) removes the rough part of the error in one pass over the matrix per iteration, but not the
+smooth part, whose number of modes grows as 1/dx: 37 / 45 / 66 iterations on the captured T22-A150
+PPE at 4 / 2 / 1 mm (3855 / 15 170 / 59 531 unknowns), 72 on T22-A70 at 1 mm. A coarse space of
+aggregates (piecewise-constant prolongation P over aggregates of the matrix graph, each root taking
+its whole two-ring row: ~70 unknowns per aggregate; ``linsolve.aggregate_nodes``' rule) takes the
+smooth modes out; with it the iterations stay at 22-24 at every resolution (same systems: 24 / 22 /
+22).
+
+The preconditioner is the "adapted deflation" one of Tang, Nabben, Vuik & Erlangga (2009, J. Sci.
+Comput. 39, 340; A-DEF2): z = (I − Q A) S⁻¹ r, Q = P A_c⁻¹ Pᵀ, A_c = Pᵀ A P (exact, dense Cholesky),
+S = (D + L) D⁻¹ (D + U) the symmetric Gauss-Seidel matrix, with the start x₀ = x_g + Q (b − A x_g)
+(Pᵀ r₀ = 0, kept by every iteration), which makes it a symmetric positive definite preconditioner
+on the iterates' subspace; its iterations equal those of the symmetric two-level cycle (coarse,
+SGS, coarse) at one coarse solve per iteration instead of two. Its cost per iteration stays close
+to one pass over the matrix:
+
+- S⁻¹ r: a forward sweep w = (D + L)⁻¹ r and a backward sweep y = (D + U)⁻¹ D w;
+- A y = L y + D w (since U y = D w − D y): L y is scattered from the backward sweep's rows while
+  they are in cache ((L y)_j += U_kj y_k once y_k is known), so the upper triangle is read once;
+- Q A y: restriction, the coarse solve (two dense triangular solves of n_c² / 2), prolongation; and
+  A Q A y = (A P) (A_c⁻¹ Pᵀ A y) with the n × n_c matrix A P (~3-4 entries per row), so that
+  A z = A y − A Q A y needs no product with A, and q = A p follows from p = z + β p_old as
+  q = A z + β q_old.
+
+Same stopping test as :func:`linsolve.pcg_dic_split`: ‖b − A x‖ < max(atol, rtol ‖b‖) for the
+true residual, checked once the recurrence's residual passes it (a failed check restarts the
+iteration from the true residual). Same return convention. The set-up (aggregation, A P, A_c and its
+Cholesky factor) is done on every call: the matrix changes every step. Above ``COARSE_MAX``
+aggregates the dense coarse factor would cost more than it saves (n_c³ / 3 flops); the solve is
+then :func:`linsolve.pcg_dic_split`'s (no deflation).
+
+Results: the same operator and stopping test as the SSOR-CG, so the solutions agree within the
+solver tolerance (not bit for bit); the runout check is in docs/speed.md.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .linsolve import BREAKDOWN, NONFINITE, _dot, _split_residual, pcg_dic_split
+
+#: above this many aggregates the dense coarse Cholesky (n_c³ / 3 flops per step) is not set up
+#: and the solve falls back to the SSOR-CG without deflation (~170 000 unknowns at ~70 per aggregate)
+COARSE_MAX = 2500
+
+
+@njit(cache=True)
+def aggregate_split(lp, li, lv, up, ui, uv):
+    """Aggregates of the graph of A given as its triangles (:func:`linsolve.aggregate_nodes`' rule:
+    pass 1 makes each node whose neighbourhood is still free the root of an aggregate holding its
+    whole row; pass 2 joins each remaining node to the pass-1 aggregate it is most strongly coupled
+    to; pass 3 makes new aggregates of what is left). Returns (aggregate of each node, count)."""
+    n = lp.size - 1
+    agg = np.full(n, -1, np.int64)
+    nc = 0
+    for i in range(n):
+        if agg[i] >= 0:
+            continue
+        free = True
+        for k in range(lp[i], lp[i + 1]):
+            if agg[li[k]] >= 0:
+                free = False
+                break
+        if free:
+            for k in range(up[i], up[i + 1]):
+                if agg[ui[k]] >= 0:
+                    free = False
+                    break
+        if not free:
+            continue
+        for k in range(lp[i], lp[i + 1]):
+            agg[li[k]] = nc
+        for k in range(up[i], up[i + 1]):
+            agg[ui[k]] = nc
+        agg[i] = nc
+        nc += 1
+    first = agg.copy()
+    for i in range(n):
+        if first[i] >= 0:
+            continue
+        best = -1
+        strongest = 0.0
+        for k in range(lp[i], lp[i + 1]):
+            j = li[k]
+            if first[j] >= 0 and abs(lv[k]) > strongest:
+                strongest = abs(lv[k])
+                best = first[j]
+        for k in range(up[i], up[i + 1]):
+            j = ui[k]
+            if first[j] >= 0 and abs(uv[k]) > strongest:
+                strongest = abs(uv[k])
+                best = first[j]
+        agg[i] = best
+    for i in range(n):
+        if agg[i] < 0:
+            agg[i] = nc
+            for k in range(lp[i], lp[i + 1]):
+                if agg[li[k]] < 0:
+                    agg[li[k]] = nc
+            for k in range(up[i], up[i + 1]):
+                if agg[ui[k]] < 0:
+                    agg[ui[k]] = nc
+            nc += 1
+    return agg, nc
+
+
+@njit(cache=True)
+def coarse_operators(lp, li, lv, up, ui, uv, diag, agg, nc):
+    """A P (CSR, n × n_c: row i summed over each aggregate) and A_c = Pᵀ A P (dense). One pass over
+    the triangles; a row's few distinct aggregates (3-4 on average: the aggregates are as wide as
+    the rows) are summed in a dense accumulator and listed without a branch (as the triangle
+    assembly's product does)."""
+    n = diag.size
+    acc = np.zeros(nc)
+    mark = np.full(nc, -1, np.int64)
+    lst = np.empty(nc + 1, np.int64)
+    cap = 8 * n
+    api = np.empty(cap, np.int64)
+    apv = np.empty(cap)
+    app = np.zeros(n + 1, np.int64)
+    t0 = 0
+    for i in range(n):
+        c = agg[i]
+        lst[0] = c
+        cnt = 1
+        mark[c] = i
+        acc[c] += diag[i]
+        for k in range(lp[i], lp[i + 1]):
+            c = agg[li[k]]
+            lst[cnt] = c
+            cnt += mark[c] != i
+            mark[c] = i
+            acc[c] += lv[k]
+        for k in range(up[i], up[i + 1]):
+            c = agg[ui[k]]
+            lst[cnt] = c
+            cnt += mark[c] != i
+            mark[c] = i
+            acc[c] += uv[k]
+        if t0 + cnt > cap:                   # never seen: ~3.3 aggregates per row
+            cap = 2 * cap + cnt
+            api2 = np.empty(cap, np.int64)
+            apv2 = np.empty(cap)
+            api2[:t0] = api[:t0]
+            apv2[:t0] = apv[:t0]
+            api = api2
+            apv = apv2
+        for t in range(cnt):
+            c = lst[t]
+            api[t0 + t] = c
+            apv[t0 + t] = acc[c]
+            acc[c] = 0.0
+        t0 += cnt
+        app[i + 1] = t0
+    ac = np.zeros((nc, nc))
+    for i in range(n):
+        a = agg[i]
+        for t in range(app[i], app[i + 1]):
+            ac[a, api[t]] += apv[t]
+    return app, api[:t0], apv[:t0], ac
+
+
+@njit(cache=True)
+def coarse_factor(ac):
+    """Cholesky factor L of A_c and Lᵀ (both C-ordered, rows contiguous for the two solves), and
+    whether A_c is positive definite (a non-positive or NaN diagonal or pivot: not)."""
+    nc = ac.shape[0]
+    for i in range(nc):
+        if not ac[i, i] > 0.0:
+            return ac, ac, False
+    try:
+        lc = np.linalg.cholesky(ac)      # LAPACK potrf; raises on a non-positive pivot
+    except Exception:                    # noqa: BLE001 (numba catches no narrower class)
+        return ac, ac, False
+    for i in range(nc):
+        if not lc[i, i] > 0.0:
+            return lc, lc, False
+    return lc, np.ascontiguousarray(lc.T), True
+
+
+@njit(cache=True)
+def _coarse_solve(lc, lct, rc, yc):
+    """rc ← A_c⁻¹ rc (A_c = L Lᵀ; yc: work)."""
+    nc = rc.size
+    for i in range(nc):
+        s = rc[i]
+        for j in range(i):
+            s -= lc[i, j] * yc[j]
+        yc[i] = s / lc[i, i]
+    for i in range(nc - 1, -1, -1):
+        s = yc[i]
+        for j in range(i + 1, nc):
+            s -= lct[i, j] * rc[j]
+        rc[i] = s / lct[i, i]
+
+
+@njit(cache=True)
+def _deflate_start(lc, lct, agg, app, api, apv, x, r, rc, yc):
+    """x ← x + Q r, r ← r − A Q r (then Pᵀ r = 0); returns ‖r‖."""
+    rc[:] = 0.0
+    for i in range(r.size):
+        rc[agg[i]] += r[i]
+    _coarse_solve(lc, lct, rc, yc)
+    for i in range(r.size):
+        x[i] += rc[agg[i]]
+        s = 0.0
+        for t in range(app[i], app[i + 1]):
+            s += apv[t] * rc[api[t]]
+        r[i] -= s
+    return math.sqrt(_dot(r, r))
+
+
+@njit(cache=True)
+def _sgs_with_product(lp, li, lv, up, ui, uv, diag, dinv, r, w, y, ay):
+    """y = S⁻¹ r (symmetric Gauss-Seidel: w = (D + L)⁻¹ r, y = (D + U)⁻¹ D w) and ay = A y = L y + D w,
+    L y scattered from the backward sweep's rows (one read of each triangle)."""
+    n = r.size
+    for i in range(n):
+        acc = r[i]
+        for k in range(lp[i], lp[i + 1]):
+            acc -= lv[k] * w[li[k]]
+        w[i] = acc * dinv[i]
+    for i in range(n):
+        ay[i] = diag[i] * w[i]
+    for i in range(n - 1, -1, -1):
+        acc = 0.0
+        for k in range(up[i], up[i + 1]):
+            acc += uv[k] * y[ui[k]]
+        yi = w[i] - acc * dinv[i]
+        y[i] = yi
+        for k in range(up[i], up[i + 1]):
+            ay[ui[k]] += uv[k] * yi
+
+
+@njit(cache=True)
+def pcg_ssor_deflated(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter):
+    """Solve A x = b (A SPD given as its triangles and diagonal, :func:`linsolve.split_triangles`'
+    layout) by SSOR-CG with the aggregation deflation space (module docstring), warm-started from
+    x0. Returns (x, iterations, info) as :func:`linsolve.pcg_dic_split`: info 0 converged,
+    ``maxiter`` not, ``BREAKDOWN`` for a coarse matrix that is not positive definite, a non-positive
+    diagonal or curvature, ``NONFINITE`` for a right-hand side with NaN/inf."""
+    n = b.size
+    nb = math.sqrt(_dot(b, b))
+    if nb == 0.0:
+        return b.copy(), 0, 0
+    if not math.isfinite(nb):
+        return x0.copy(), 0, NONFINITE
+    for i in range(n):
+        if not diag[i] > 0.0:
+            return x0.copy(), 0, BREAKDOWN
+    agg, nc = aggregate_split(lp, li, lv, up, ui, uv)
+    if nc > COARSE_MAX:
+        return pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, -1.0)
+    app, api, apv, ac = coarse_operators(lp, li, lv, up, ui, uv, diag, agg, nc)
+    lc, lct, ok = coarse_factor(ac)
+    if not ok:
+        return x0.copy(), 0, BREAKDOWN
+    thresh = max(atol, rtol * nb)
+    dinv = 1.0 / diag
+    x = x0.copy()
+    r = np.empty(n)
+    nr = _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r)
+    if nr < thresh:
+        return x, 0, 0
+    rc = np.empty(nc)
+    yc = np.empty(nc)
+    w = np.empty(n)
+    y = np.empty(n)
+    ay = np.empty(n)
+    p = np.zeros(n)
+    q = np.zeros(n)
+    _deflate_start(lc, lct, agg, app, api, apv, x, r, rc, yc)
+    rho_prev = 1.0
+    first = True
+    for it in range(maxiter):
+        _sgs_with_product(lp, li, lv, up, ui, uv, diag, dinv, r, w, y, ay)
+        rc[:] = 0.0                              # e = A_c⁻¹ Pᵀ A y
+        for i in range(n):
+            rc[agg[i]] += ay[i]
+        _coarse_solve(lc, lct, rc, yc)
+        rho = 0.0
+        for i in range(n):                       # z = y − P e (in y), A z = A y − (A P) e (in ay)
+            y[i] -= rc[agg[i]]
+            s = 0.0
+            for t in range(app[i], app[i + 1]):
+                s += apv[t] * rc[api[t]]
+            ay[i] -= s
+        rho = _dot(r, y)
+        if not rho > 0.0:
+            return x, it, BREAKDOWN
+        beta = 0.0 if first else rho / rho_prev
+        first = False
+        for i in range(n):
+            p[i] = y[i] + beta * p[i]
+            q[i] = ay[i] + beta * q[i]
+        pq = _dot(p, q)
+        if not pq > 0.0:
+            return x, it, BREAKDOWN
+        alpha = rho / pq
+        for i in range(n):
+            x[i] += alpha * p[i]
+            r[i] -= alpha * q[i]
+        rho_prev = rho
+        if math.sqrt(_dot(r, r)) < thresh:
+            nr = _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r)
+            if nr < thresh:
+                return x, it + 1, 0
+            _deflate_start(lc, lct, agg, app, api, apv, x, r, rc, yc)   # restart from the true residual
+            first = True
+    return x, maxiter, maxiter
