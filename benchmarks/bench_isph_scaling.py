@@ -9,7 +9,9 @@ Each variant also prints the parts of its step (issue 26: PPE assembly, PPE CG, 
 viscous CG, the rest) and the issue-26 targets (printed, never asserted): <= 10 ms/step at 3750
 particles on one thread, and T22-A70 at 1 mm to rest <= 20 min estimated from ms/step at 28 000
 particles (power law between the measured N) x 6109 steps (the no-slip bed's run to rest). A variant is a
-numerics.pressure_solver value, optionally /numerics.ppe_operator (cg_dic/matrix_free).
+numerics.pressure_solver value, optionally /numerics.ppe_operator (cg_dic/matrix_free), or
+cg_dic/deflated and cg_dic/undeflated: the SSOR-CG with and without the aggregation coarse space at
+any N (numerics.deflation_min_unknowns 0 / never; the default deflates from 12 000 unknowns on).
 
 Run (one command per figure set):
   NUMBA_NUM_THREADS=1 python benchmarks/bench_isph_scaling.py [--dx 4,2,1] [--steps 50] [--solvers cg_two_level,cg_dic]
@@ -18,6 +20,7 @@ Run (one command per figure set):
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py ...
   python benchmarks/bench_isph_scaling.py --threads 1,2      (one subprocess per thread count, interleaved)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py --to-rest 2,1   (T22-A70 to rest, wall time)
+      [--set numerics.deflation_min_unknowns=1000000000000]   (scheme options also apply to --to-rest)
 Timings on a shared machine are noisy: ``--repeats`` runs the same steps again from the
 checkpoint (interleaved over the solvers) and the median is printed, with the process CPU time.
 
@@ -132,6 +135,8 @@ def checkpoint(case: str, dx: float, t_flow: float):
 
 #: scheme options of the timed steps (``--set KEY=VALUE``), e.g. numerics.projection=approximate
 SETS: dict = {}
+#: ``--solvers`` suffixes that set numerics.deflation_min_unknowns (isph/deflation.py)
+DEFLATION = {"deflated": 0, "undeflated": 10 ** 12}
 
 
 def _restart(s, solver: str):
@@ -139,7 +144,10 @@ def _restart(s, solver: str):
     options (same state: a developed flow of the default scheme)."""
     from granudep.isph.config import load_config
     solver, _, operator = solver.partition("/")   # e.g. cg_dic/matrix_free: numerics.ppe_operator
-    over = {"numerics.ppe_operator": operator} if operator else {}
+    if operator in DEFLATION:                      # cg_dic/deflated, cg_dic/undeflated: the SSOR-CG with or
+        over = {"numerics.deflation_min_unknowns": DEFLATION[operator]}   # without the coarse space at any N
+    else:
+        over = {"numerics.ppe_operator": operator} if operator else {}
     s.cfg = load_config(s.cfg, **{"numerics.pressure_solver": solver, **over, **SETS})
     s.stats.__init__()
     return s
@@ -282,7 +290,8 @@ def to_rest(args) -> None:
     for d in args.to_rest.split(","):
         dx = float(d) * 1e-3
         t0 = time.perf_counter()
-        ds = run_isph("T22-A70", dx=dx, progress_every_s=60.0, **({"numerics.pressure_solver": args.solvers.split(",")[0]}))
+        ds = run_isph("T22-A70", dx=dx, progress_every_s=60.0,
+                      **{"numerics.pressure_solver": args.solvers.split(",")[0].partition("/")[0], **SETS})
         wall = time.perf_counter() - t0
         print(f"T22-A70 dx={d}mm ({ds.attrs['n_particles']} particles, NUMBA_NUM_THREADS="
               f"{os.environ.get('NUMBA_NUM_THREADS', '(unset)')}): {ds.attrs['status']} at t={float(ds.time[-1]):.3f} s, "

@@ -20,7 +20,8 @@ import csv
 import time
 
 import numpy as np
-import yaml
+
+from granudep.cliutil import parse_sets
 
 
 def one_run(case: str, dx: float, seed: int, overrides: dict) -> dict:
@@ -61,10 +62,7 @@ def main() -> None:
     rows = []
     for seed in seeds:                        # variants interleaved per seed (the machine drifts)
         for name, *sets in args.variant:
-            over = {}
-            for kv in sets:
-                k, v = kv.split("=", 1)
-                over[k] = yaml.safe_load(v)
+            over = parse_sets(sets)       # the CLI's --set rule (YAML 1.2 numbers: 1e-10 is a float)
             row = {"variant": name, **one_run(args.case, args.dx, seed, over)}
             rows.append(row)
             print(" ".join(f"{k} {v:.4f}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()), flush=True)

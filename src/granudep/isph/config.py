@@ -209,13 +209,14 @@ class Numerics:
                                      "symmetric Gauss-Seidel (SSOR, omega = 1) preconditioner in Eisenstat form, "
                                      "which never breaks down (adjoint-pair PPE at 4 mm: 47 -> 29 iterations; "
                                      "docs/speed.md)")
-    deflation_min_unknowns: int = param(6_000, ge=0, unit="unknowns",
+    deflation_min_unknowns: int = param(12_000, ge=0, unit="unknowns",
                                         doc="adjoint_pair PPE with cg_dic / cg_ssor: from this many unknowns "
                                             "on, the SSOR-CG is deflated by an aggregation coarse space "
-                                            "(A-DEF2, isph/deflation.py: 17-19 iterations at every dx instead "
-                                            "of 27-69; the solve 1.2x faster at 7k unknowns, 1.8-2.3x at 28k; "
-                                            "slower below ~5000, so the 4 mm runs keep the plain SSOR-CG, "
-                                            "docs/speed.md); same operator and stopping test: the solution "
+                                            "(A-DEF2, isph/deflation.py: 17-27 iterations at every dx instead "
+                                            "of 29-72). Measured through T22-A70 runs (docs/speed.md): at "
+                                            "7k unknowns (2 mm) 0-30 % slower, at 14.5k (1.4 mm) 0-28 % "
+                                            "faster, at 28k (1 mm) ~2x faster, so the 4 and 2 mm runs keep "
+                                            "the plain SSOR-CG; same operator and stopping test: the solution "
                                             "agrees within solver_rtol; 0 = always")
     ppe_operator: str = param("assembled", choices=("assembled", "matrix_free"),
                               doc="adjoint_pair PPE with the two-level CG (pressure_solver "

@@ -32,6 +32,12 @@ Cholesky factor) is done on every call: the matrix changes every step. Above ``C
 aggregates the dense coarse factor would cost more than it saves (n_c³ / 3 flops); the solve is
 then :func:`linsolve.pcg_dic_split`'s (no deflation).
 
+Cost (one thread, docs/speed.md, session 16): an iteration is 1.5-1.65x an Eisenstat SSOR iteration
+(the scatter, the coarse correction, A P) and the set-up ~5 sweeps (aggregation, A P, A_c, its
+factor). Through T22-A70 runs the solve is 0-30 % slower at 7k unknowns (2 mm: 29-52 SSOR iterations
+against 17-27), 0-28 % faster at 14.5k (1.4 mm: 35-69 against 17-27) and about twice as fast at 28k
+(1 mm: 64-72 against 18-19); ``numerics.deflation_min_unknowns`` (12 000) picks it from there on.
+
 Results: the same operator and stopping test as the SSOR-CG, so the solutions agree within the
 solver tolerance (not bit for bit); the runout check is in docs/speed.md.
 """
@@ -224,9 +230,9 @@ def _sgs_with_product(lp, li, lv, up, ui, uv, diag, dinv, r, w, y, ay):
         acc = r[i]
         for k in range(lp[i], lp[i + 1]):
             acc -= lv[k] * w[li[k]]
-        w[i] = acc * dinv[i]
-    for i in range(n):
-        ay[i] = diag[i] * w[i]
+        wi = acc * dinv[i]
+        w[i] = wi
+        ay[i] = diag[i] * wi
     for i in range(n - 1, -1, -1):
         acc = 0.0
         for k in range(up[i], up[i + 1]):
@@ -284,29 +290,36 @@ def pcg_ssor_deflated(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter):
             rc[agg[i]] += ay[i]
         _coarse_solve(lc, lct, rc, yc)
         rho = 0.0
-        for i in range(n):                       # z = y − P e (in y), A z = A y − (A P) e (in ay)
-            y[i] -= rc[agg[i]]
+        for i in range(n):                       # z = y − P e (in y), A z = A y − (A P) e (in ay), ρ = r·z
+            zi = y[i] - rc[agg[i]]
+            y[i] = zi
             s = 0.0
             for t in range(app[i], app[i + 1]):
                 s += apv[t] * rc[api[t]]
             ay[i] -= s
-        rho = _dot(r, y)
+            rho += r[i] * zi
         if not rho > 0.0:
             return x, it, BREAKDOWN
         beta = 0.0 if first else rho / rho_prev
         first = False
-        for i in range(n):
-            p[i] = y[i] + beta * p[i]
-            q[i] = ay[i] + beta * q[i]
-        pq = _dot(p, q)
+        pq = 0.0
+        for i in range(n):                       # p = z + β p, q = A p = A z + β q, p·q
+            pi = y[i] + beta * p[i]
+            qi = ay[i] + beta * q[i]
+            p[i] = pi
+            q[i] = qi
+            pq += pi * qi
         if not pq > 0.0:
             return x, it, BREAKDOWN
         alpha = rho / pq
+        rr = 0.0
         for i in range(n):
             x[i] += alpha * p[i]
-            r[i] -= alpha * q[i]
+            ri = r[i] - alpha * q[i]
+            r[i] = ri
+            rr += ri * ri
         rho_prev = rho
-        if math.sqrt(_dot(r, r)) < thresh:
+        if math.sqrt(rr) < thresh:
             nr = _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r)
             if nr < thresh:
                 return x, it + 1, 0
