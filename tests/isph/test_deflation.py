@@ -154,7 +154,7 @@ def test_too_many_aggregates_falls_back_to_the_ssor_cg():
 
 
 def test_solver_uses_the_deflated_cg_from_the_threshold_on():
-    """A short T22-A70 collapse (dx = 1 cm): deflate_min_unknowns = 0 (deflated on every step)
+    """A short T22-A70 collapse (dx = 1 cm): deflation_min_unknowns = 0 (deflated on every step)
     follows the SSOR-CG run within the solver tolerance amplified by the flow (as the cg / cg_dic
     comparison of test_linsolve does), in fewer PPE iterations."""
     from granudep.isph.config import load_config
