@@ -215,9 +215,10 @@ class Numerics:
                                             "(A-DEF2, isph/deflation.py: 17-27 iterations at every dx instead "
                                             "of 29-72). Measured through T22-A70 runs (docs/speed.md): at "
                                             "7k unknowns (2 mm) 0-30 % slower, at 14.5k (1.4 mm) 0-28 % "
-                                            "faster, at 28k (1 mm) ~2x faster, so the 4 and 2 mm runs keep "
-                                            "the plain SSOR-CG; same operator and stopping test: the solution "
-                                            "agrees within solver_rtol; 0 = always")
+                                            "faster, at 28k (1 mm) ~2x faster, so the 4 mm runs and the "
+                                            "7000-particle 2 mm columns keep the plain SSOR-CG; same "
+                                            "operator and stopping test: the solution agrees within "
+                                            "solver_rtol; 0 = always")
     ppe_operator: str = param("assembled", choices=("assembled", "matrix_free"),
                               doc="adjoint_pair PPE with the two-level CG (pressure_solver "
                                   "cg_two_level): the matrix assembled as the product (1 - eps) D D^T + eps L_c "
