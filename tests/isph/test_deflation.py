@@ -5,9 +5,9 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from granudep.isph.deflation import (_sgs_with_product, aggregate_split, coarse_factor, coarse_operators,
-                                     pcg_ssor_deflated)
-from granudep.isph.linsolve import BREAKDOWN, NONFINITE, aggregate_nodes, pcg_dic_split, split_triangles
+from granudep.isph.deflation import _sgs_with_product, coarse_operators, pcg_ssor_deflated
+from granudep.isph.linsolve import (BREAKDOWN, NONFINITE, aggregate_nodes, aggregate_rows, coarse_factor, pcg_dic_split,
+                                    split_triangles)
 
 from test_linsolve import _particle_matrix
 
@@ -26,9 +26,9 @@ def _prolongation(agg, nc):
     return sp.csr_matrix((np.ones(n), (np.arange(n), agg)), shape=(n, nc))
 
 
-def test_aggregates_are_those_of_the_csr_rule():
-    """The triangle form aggregates as linsolve.aggregate_nodes does on the same matrix (random
-    weights: no ties in pass 2), and the aggregates are a coarse space."""
+def test_aggregates_of_the_triangles_are_those_of_the_csr_matrix():
+    """aggregate_rows on the two triangles (diagonal left out) gives the aggregates of the CSR matrix
+    (diagonal first, neighbours unsorted; random weights: no ties in pass 2), a coarse space."""
     indptr, indices, data = _particle_matrix(24, 1e-3, 5, radius=5.2, random_shift=False)
     rng = np.random.default_rng(0)
     n = indptr.size - 1
@@ -37,14 +37,14 @@ def test_aggregates_are_those_of_the_csr_rule():
     noise.data = noise.data * (1.0 + 0.1 * rng.random(noise.data.size))   # still symmetric
     a = (sp.diags(a.diagonal()) + noise + noise.T).tocsr()
     agg_ref, nc_ref = aggregate_nodes(a.indptr.astype(np.int64), a.indices.astype(np.int64), a.data)
-    agg, nc = aggregate_split(*split_triangles(a.indptr.astype(np.int64), a.indices.astype(np.int64), a.data)[:6])
+    agg, nc = aggregate_rows(*split_triangles(a.indptr.astype(np.int64), a.indices.astype(np.int64), a.data)[:6])
     assert nc == nc_ref and np.array_equal(agg, agg_ref)
     assert np.unique(agg).size == nc and nc < n / 10
 
 
 def test_coarse_operators_are_a_p_and_the_galerkin_product():
     a, tri = _wide(n_side=20)
-    agg, nc = aggregate_split(*tri[:6])
+    agg, nc = aggregate_rows(*tri[:6])
     app, api, apv, ac = coarse_operators(*tri, agg, nc)
     p = _prolongation(agg, nc)
     ap = sp.csr_matrix((apv, api, app), shape=(a.shape[0], nc))
@@ -103,7 +103,7 @@ def test_the_preconditioned_operator_is_symmetric_on_the_deflated_subspace():
     a, tri = _wide(n_side=12)
     n = a.shape[0]
     lp, li, lv, up, ui, uv, diag = tri
-    agg, nc = aggregate_split(*tri[:6])
+    agg, nc = aggregate_rows(*tri[:6])
     p = _prolongation(agg, nc).toarray()
     ad = a.toarray()
     q = p @ np.linalg.solve(p.T @ ad @ p, p.T)
@@ -120,6 +120,7 @@ def test_the_preconditioned_operator_is_symmetric_on_the_deflated_subspace():
 
 
 def test_coarse_factor_refuses_a_matrix_that_is_not_positive_definite():
+    """Reported (the solvers return BREAKDOWN and the caller falls back), never raised."""
     assert coarse_factor(np.array([[1.0, 2.0], [2.0, 1.0]]))[2] is False
     assert coarse_factor(np.array([[-1.0, 0.0], [0.0, 1.0]]))[2] is False
     assert coarse_factor(np.array([[2.0, 1.0], [1.0, 2.0]]))[2] is True
@@ -138,6 +139,17 @@ def test_deflated_cg_edge_cases():
     x_ref = spla.spsolve(a.tocsc(), np.ones(n))
     assert pcg_ssor_deflated(*tri, np.ones(n), x_ref, 1e-8, 0.0, 100)[1] == 0     # already converged
     assert pcg_ssor_deflated(*tri, np.ones(n), np.zeros(n), 1e-15, 0.0, 2)[1:] == (2, 2)
+
+
+def test_below_the_threshold_it_is_the_ssor_cg_bit_for_bit():
+    a, tri = _wide(n_side=20)
+    n = a.shape[0]
+    b = np.random.default_rng(3).normal(size=n)
+    below = pcg_ssor_deflated(*tri, b, np.zeros(n), 1e-10, 0.0, 500, n + 1)
+    ssor = pcg_dic_split(*tri, b, np.zeros(n), 1e-10, 0.0, 500, -1.0)
+    assert np.array_equal(below[0], ssor[0]) and below[1:] == ssor[1:]
+    at = pcg_ssor_deflated(*tri, b, np.zeros(n), 1e-10, 0.0, 500, n)      # from the threshold on: deflated
+    assert at[2] == 0 and at[1] < ssor[1]
 
 
 def test_too_many_aggregates_falls_back_to_the_ssor_cg():

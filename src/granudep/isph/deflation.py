@@ -5,7 +5,8 @@ form) removes the rough part of the error in one pass over the matrix per iterat
 smooth part, whose number of modes grows as 1/dx: 37 / 45 / 66 iterations on the captured T22-A150
 PPE at 4 / 2 / 1 mm (3855 / 15 170 / 59 531 unknowns), 72 on T22-A70 at 1 mm. A coarse space of
 aggregates (piecewise-constant prolongation P over aggregates of the matrix graph, each root taking
-its whole two-ring row: ~70 unknowns per aggregate; ``linsolve.aggregate_nodes``' rule) takes the
+its whole two-ring row: ~70 unknowns per aggregate; ``linsolve.aggregate_rows``, the rule of the
+two-level CG) takes the
 smooth modes out; with it the iterations stay at 22-24 at every resolution (same systems: 24 / 22 /
 22).
 
@@ -48,84 +49,37 @@ import math
 import numpy as np
 from numba import njit
 
-from .linsolve import BREAKDOWN, NONFINITE, _dot, _split_residual, pcg_dic_split
+from .linsolve import (BREAKDOWN, NONFINITE, _dot, _split_residual, aggregate_rows, coarse_factor, coarse_solve,
+                       pcg_dic_split)
 
 #: above this many aggregates the dense coarse Cholesky (n_c³ / 3 flops per step) is not set up
 #: and the solve falls back to the SSOR-CG without deflation (~170 000 unknowns at ~70 per aggregate)
 COARSE_MAX = 2500
 
 
-@njit(cache=True)
-def aggregate_split(lp, li, lv, up, ui, uv):
-    """Aggregates of the graph of A given as its triangles (:func:`linsolve.aggregate_nodes`' rule:
-    pass 1 makes each node whose neighbourhood is still free the root of an aggregate holding its
-    whole row; pass 2 joins each remaining node to the pass-1 aggregate it is most strongly coupled
-    to; pass 3 makes new aggregates of what is left). Returns (aggregate of each node, count)."""
-    n = lp.size - 1
-    agg = np.full(n, -1, np.int64)
-    nc = 0
-    for i in range(n):
-        if agg[i] >= 0:
-            continue
-        free = True
-        for k in range(lp[i], lp[i + 1]):
-            if agg[li[k]] >= 0:
-                free = False
-                break
-        if free:
-            for k in range(up[i], up[i + 1]):
-                if agg[ui[k]] >= 0:
-                    free = False
-                    break
-        if not free:
-            continue
-        for k in range(lp[i], lp[i + 1]):
-            agg[li[k]] = nc
-        for k in range(up[i], up[i + 1]):
-            agg[ui[k]] = nc
-        agg[i] = nc
-        nc += 1
-    first = agg.copy()
-    for i in range(n):
-        if first[i] >= 0:
-            continue
-        best = -1
-        strongest = 0.0
-        for k in range(lp[i], lp[i + 1]):
-            j = li[k]
-            if first[j] >= 0 and abs(lv[k]) > strongest:
-                strongest = abs(lv[k])
-                best = first[j]
-        for k in range(up[i], up[i + 1]):
-            j = ui[k]
-            if first[j] >= 0 and abs(uv[k]) > strongest:
-                strongest = abs(uv[k])
-                best = first[j]
-        agg[i] = best
-    for i in range(n):
-        if agg[i] < 0:
-            agg[i] = nc
-            for k in range(lp[i], lp[i + 1]):
-                if agg[li[k]] < 0:
-                    agg[li[k]] = nc
-            for k in range(up[i], up[i + 1]):
-                if agg[ui[k]] < 0:
-                    agg[ui[k]] = nc
-            nc += 1
-    return agg, nc
+@njit(cache=True, inline="always")
+def _sum_by_aggregate(ptr, idx, val, i, agg, mark, lst, acc, cnt):
+    """Add row i's entries ptr[i]:ptr[i+1] into the dense accumulator ``acc`` by aggregate, listing
+    each aggregate met for the first time in row i (without a branch); returns the list's length."""
+    for k in range(ptr[i], ptr[i + 1]):
+        c = agg[idx[k]]
+        lst[cnt] = c
+        cnt += mark[c] != i
+        mark[c] = i
+        acc[c] += val[k]
+    return cnt
 
 
 @njit(cache=True)
 def coarse_operators(lp, li, lv, up, ui, uv, diag, agg, nc):
     """A P (CSR, n × n_c: row i summed over each aggregate) and A_c = Pᵀ A P (dense). One pass over
     the triangles; a row's few distinct aggregates (3-4 on average: the aggregates are as wide as
-    the rows) are summed in a dense accumulator and listed without a branch (as the triangle
-    assembly's product does)."""
+    the rows) are summed in a dense accumulator (as the triangle assembly's product does)."""
     n = diag.size
     acc = np.zeros(nc)
     mark = np.full(nc, -1, np.int64)
     lst = np.empty(nc + 1, np.int64)
-    cap = 8 * n
+    cap = lp[n] + up[n] + n              # a row has at most its own entries' aggregates
     api = np.empty(cap, np.int64)
     apv = np.empty(cap)
     app = np.zeros(n + 1, np.int64)
@@ -133,29 +87,10 @@ def coarse_operators(lp, li, lv, up, ui, uv, diag, agg, nc):
     for i in range(n):
         c = agg[i]
         lst[0] = c
-        cnt = 1
         mark[c] = i
         acc[c] += diag[i]
-        for k in range(lp[i], lp[i + 1]):
-            c = agg[li[k]]
-            lst[cnt] = c
-            cnt += mark[c] != i
-            mark[c] = i
-            acc[c] += lv[k]
-        for k in range(up[i], up[i + 1]):
-            c = agg[ui[k]]
-            lst[cnt] = c
-            cnt += mark[c] != i
-            mark[c] = i
-            acc[c] += uv[k]
-        if t0 + cnt > cap:                   # never seen: ~3.3 aggregates per row
-            cap = 2 * cap + cnt
-            api2 = np.empty(cap, np.int64)
-            apv2 = np.empty(cap)
-            api2[:t0] = api[:t0]
-            apv2[:t0] = apv[:t0]
-            api = api2
-            apv = apv2
+        cnt = _sum_by_aggregate(lp, li, lv, i, agg, mark, lst, acc, 1)
+        cnt = _sum_by_aggregate(up, ui, uv, i, agg, mark, lst, acc, cnt)
         for t in range(cnt):
             c = lst[t]
             api[t0 + t] = c
@@ -172,46 +107,12 @@ def coarse_operators(lp, li, lv, up, ui, uv, diag, agg, nc):
 
 
 @njit(cache=True)
-def coarse_factor(ac):
-    """Cholesky factor L of A_c and Lᵀ (both C-ordered, rows contiguous for the two solves), and
-    whether A_c is positive definite (a non-positive or NaN diagonal or pivot: not)."""
-    nc = ac.shape[0]
-    for i in range(nc):
-        if not ac[i, i] > 0.0:
-            return ac, ac, False
-    try:
-        lc = np.linalg.cholesky(ac)      # LAPACK potrf; raises on a non-positive pivot
-    except Exception:                    # noqa: BLE001 (numba catches no narrower class)
-        return ac, ac, False
-    for i in range(nc):
-        if not lc[i, i] > 0.0:
-            return lc, lc, False
-    return lc, np.ascontiguousarray(lc.T), True
-
-
-@njit(cache=True)
-def _coarse_solve(lc, lct, rc, yc):
-    """rc ← A_c⁻¹ rc (A_c = L Lᵀ; yc: work)."""
-    nc = rc.size
-    for i in range(nc):
-        s = rc[i]
-        for j in range(i):
-            s -= lc[i, j] * yc[j]
-        yc[i] = s / lc[i, i]
-    for i in range(nc - 1, -1, -1):
-        s = yc[i]
-        for j in range(i + 1, nc):
-            s -= lct[i, j] * rc[j]
-        rc[i] = s / lct[i, i]
-
-
-@njit(cache=True)
 def _deflate_start(lc, lct, agg, app, api, apv, x, r, rc, yc):
     """x ← x + Q r, r ← r − A Q r (then Pᵀ r = 0); returns ‖r‖."""
     rc[:] = 0.0
     for i in range(r.size):
         rc[agg[i]] += r[i]
-    _coarse_solve(lc, lct, rc, yc)
+    coarse_solve(lc, lct, rc, yc)
     for i in range(r.size):
         x[i] += rc[agg[i]]
         s = 0.0
@@ -244,12 +145,16 @@ def _sgs_with_product(lp, li, lv, up, ui, uv, diag, dinv, r, w, y, ay):
 
 
 @njit(cache=True)
-def pcg_ssor_deflated(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter):
+def pcg_ssor_deflated(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, min_unknowns=0):
     """Solve A x = b (A SPD given as its triangles and diagonal, :func:`linsolve.split_triangles`'
     layout) by SSOR-CG with the aggregation deflation space (module docstring), warm-started from
     x0. Returns (x, iterations, info) as :func:`linsolve.pcg_dic_split`: info 0 converged,
     ``maxiter`` not, ``BREAKDOWN`` for a coarse matrix that is not positive definite, a non-positive
-    diagonal or curvature, ``NONFINITE`` for a right-hand side with NaN/inf."""
+    diagonal or curvature, ``NONFINITE`` for a right-hand side with NaN/inf. Below ``min_unknowns``
+    unknowns (``numerics.deflation_min_unknowns``: there the set-up costs more than the iterations
+    it saves) and above ``COARSE_MAX`` aggregates it is :func:`linsolve.pcg_dic_split`'s SSOR-CG."""
+    if b.size < min_unknowns:
+        return pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, -1.0)
     n = b.size
     nb = math.sqrt(_dot(b, b))
     if nb == 0.0:
@@ -259,7 +164,7 @@ def pcg_ssor_deflated(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter):
     for i in range(n):
         if not diag[i] > 0.0:
             return x0.copy(), 0, BREAKDOWN
-    agg, nc = aggregate_split(lp, li, lv, up, ui, uv)
+    agg, nc = aggregate_rows(lp, li, lv, up, ui, uv)
     if nc > COARSE_MAX:
         return pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, -1.0)
     app, api, apv, ac = coarse_operators(lp, li, lv, up, ui, uv, diag, agg, nc)
@@ -288,7 +193,7 @@ def pcg_ssor_deflated(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter):
         rc[:] = 0.0                              # e = A_c⁻¹ Pᵀ A y
         for i in range(n):
             rc[agg[i]] += ay[i]
-        _coarse_solve(lc, lct, rc, yc)
+        coarse_solve(lc, lct, rc, yc)
         rho = 0.0
         for i in range(n):                       # z = y − P e (in y), A z = A y − (A P) e (in ay), ρ = r·z
             zi = y[i] - rc[agg[i]]

@@ -860,26 +860,36 @@ def pcg_dic_two(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, max
 
 
 @njit(cache=True)
-def aggregate_nodes(indptr, indices, data):
-    """Aggregates of the matrix graph (standard aggregation, strength threshold 0): pass 1 makes
-    each node whose neighbourhood is still free the root of an aggregate holding its whole row;
-    pass 2 joins each remaining node to the pass-1 aggregate it is most strongly coupled to; pass 3
-    makes new aggregates of what is left. Returns (aggregate of each node, number of aggregates)."""
-    n = indptr.size - 1
+def aggregate_rows(pa, ia, va, pb, ib, vb):
+    """Aggregates of the matrix graph (standard aggregation, strength threshold 0), each row i given
+    as the entries pa[i]:pa[i+1] of (ia, va) followed by pb[i]:pb[i+1] of (ib, vb): a CSR matrix
+    (second part empty, :func:`aggregate_nodes`) or the two triangles of :func:`split_triangles`
+    (the deflated SSOR-CG, :mod:`.deflation`). Pass 1 makes each node whose neighbourhood is still
+    free the root of an aggregate holding its whole row; pass 2 joins each remaining node to the
+    pass-1 aggregate it is most strongly coupled to; pass 3 makes new aggregates of what is left.
+    Returns (aggregate of each node, number of aggregates)."""
+    n = pa.size - 1
     agg = np.full(n, -1, np.int64)
     nc = 0
     for i in range(n):
         if agg[i] >= 0:
             continue
         free = True
-        for q in range(indptr[i], indptr[i + 1]):
-            if agg[indices[q]] >= 0:
+        for q in range(pa[i], pa[i + 1]):
+            if agg[ia[q]] >= 0:
                 free = False
                 break
+        if free:
+            for q in range(pb[i], pb[i + 1]):
+                if agg[ib[q]] >= 0:
+                    free = False
+                    break
         if not free:
             continue
-        for q in range(indptr[i], indptr[i + 1]):
-            agg[indices[q]] = nc
+        for q in range(pa[i], pa[i + 1]):
+            agg[ia[q]] = nc
+        for q in range(pb[i], pb[i + 1]):
+            agg[ib[q]] = nc
         agg[i] = nc
         nc += 1
     first = agg.copy()
@@ -888,20 +898,34 @@ def aggregate_nodes(indptr, indices, data):
             continue
         best = -1
         strongest = 0.0
-        for q in range(indptr[i], indptr[i + 1]):
-            j = indices[q]
-            if j != i and first[j] >= 0 and abs(data[q]) > strongest:
-                strongest = abs(data[q])
+        for q in range(pa[i], pa[i + 1]):
+            j = ia[q]
+            if j != i and first[j] >= 0 and abs(va[q]) > strongest:
+                strongest = abs(va[q])
+                best = first[j]
+        for q in range(pb[i], pb[i + 1]):
+            j = ib[q]
+            if j != i and first[j] >= 0 and abs(vb[q]) > strongest:
+                strongest = abs(vb[q])
                 best = first[j]
         agg[i] = best
     for i in range(n):
         if agg[i] < 0:
             agg[i] = nc
-            for q in range(indptr[i], indptr[i + 1]):
-                if agg[indices[q]] < 0:
-                    agg[indices[q]] = nc
+            for q in range(pa[i], pa[i + 1]):
+                if agg[ia[q]] < 0:
+                    agg[ia[q]] = nc
+            for q in range(pb[i], pb[i + 1]):
+                if agg[ib[q]] < 0:
+                    agg[ib[q]] = nc
             nc += 1
     return agg, nc
+
+
+@njit(cache=True)
+def aggregate_nodes(indptr, indices, data):
+    """:func:`aggregate_rows` of a CSR matrix."""
+    return aggregate_rows(indptr, indices, data, np.zeros(indptr.size, np.int64), indices[:0], data[:0])
 
 
 @njit(cache=True)
@@ -918,11 +942,19 @@ def coarse_matrix(indptr, indices, data, agg, nc):
 @njit(cache=True)
 def _two_level_apply(lc, lct, agg, dinv, r, z, rc, yc):
     """z = D⁻¹ r + P A_c⁻¹ Pᵀ r with A_c = L Lᵀ (``lc`` = L, ``lct`` = Lᵀ, both C-ordered)."""
-    nc = rc.size
     rc[:] = 0.0
     for i in range(r.size):
         rc[agg[i]] += r[i]
-    for i in range(nc):                  # L y = Pᵀ r
+    coarse_solve(lc, lct, rc, yc)
+    for i in range(r.size):
+        z[i] = dinv[i] * r[i] + rc[agg[i]]
+
+
+@njit(cache=True)
+def coarse_solve(lc, lct, rc, yc):
+    """rc ← A_c⁻¹ rc with A_c = L Lᵀ (``lc`` = L, ``lct`` = Lᵀ, both C-ordered; yc: work)."""
+    nc = rc.size
+    for i in range(nc):                  # L y = rc
         s = rc[i]
         for j in range(i):
             s -= lc[i, j] * yc[j]
@@ -932,8 +964,25 @@ def _two_level_apply(lc, lct, agg, dinv, r, z, rc, yc):
         for j in range(i + 1, nc):
             s -= lct[i, j] * rc[j]
         rc[i] = s / lct[i, i]
-    for i in range(r.size):
-        z[i] = dinv[i] * r[i] + rc[agg[i]]
+
+
+@njit(cache=True)
+def coarse_factor(ac):
+    """Cholesky factor L of A_c and Lᵀ (both C-ordered, rows contiguous for :func:`coarse_solve`),
+    and whether A_c is positive definite (a non-positive or NaN diagonal or pivot: not; reported,
+    never raised)."""
+    nc = ac.shape[0]
+    for i in range(nc):                  # Cholesky needs a positive diagonal at least
+        if not ac[i, i] > 0.0:
+            return ac, ac, False
+    try:
+        lc = np.linalg.cholesky(ac)      # LAPACK potrf; raises on a non-positive pivot
+    except Exception:                    # noqa: BLE001 (numba catches no narrower class)
+        return ac, ac, False
+    for i in range(nc):
+        if not lc[i, i] > 0.0:           # NaN pivots
+            return lc, lc, False
+    return lc, np.ascontiguousarray(lc.T), True
 
 
 def pcg_two_level(indptr, indices, data, b, x0, rtol, atol, maxiter):
@@ -958,15 +1007,8 @@ def _two_level_setup(indptr, indices, data):
     """The aggregates, the Cholesky factor L of A_c and Lᵀ (C-ordered), and whether A_c is positive
     definite (a non-positive diagonal or pivot, or NaN: not)."""
     agg, nc = aggregate_nodes(indptr, indices, data)
-    ac = coarse_matrix(indptr, indices, data, agg, nc)
-    for i in range(nc):                  # Cholesky needs a positive diagonal at least
-        if not ac[i, i] > 0.0:
-            return agg, ac, ac, False
-    lc = np.linalg.cholesky(ac)
-    for i in range(nc):
-        if not lc[i, i] > 0.0:           # NaN pivots: A_c not positive definite
-            return agg, lc, lc, False
-    return agg, lc, np.ascontiguousarray(lc.T), True
+    lc, lct, ok = coarse_factor(coarse_matrix(indptr, indices, data, agg, nc))
+    return agg, lc, lct, ok
 
 
 # ------------------------------------------------------------------------------------------------
@@ -1134,15 +1176,8 @@ def _free_setup(op, coarse_max):
             return dinv, np.zeros(m, np.int64), np.empty((0, 0)), np.empty((0, 0)), BREAKDOWN
         dinv[i] = 1.0 / d[i]
     agg, nc = free_aggregates(op, coarse_max)
-    ac = free_coarse_matrix(op, agg, nc)
-    for i in range(nc):
-        if not ac[i, i] > 0.0:
-            return dinv, agg, ac, ac, BREAKDOWN
-    lc = np.linalg.cholesky(ac)
-    for i in range(nc):
-        if not lc[i, i] > 0.0:
-            return dinv, agg, lc, lc, BREAKDOWN
-    return dinv, agg, lc, np.ascontiguousarray(lc.T), 0
+    lc, lct, ok = coarse_factor(free_coarse_matrix(op, agg, nc))
+    return dinv, agg, lc, lct, 0 if ok else BREAKDOWN
 
 
 @prange_kernel

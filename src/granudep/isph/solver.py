@@ -43,7 +43,7 @@ from .projection import (adjoint_divergence, adjoint_pair_projection, apply_grad
                          wall_normal_acceleration)
 from .deflation import pcg_ssor_deflated
 from .linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pcg_two_level,
-                       pcg_two_level_free, pcg_dic_split,
+                       pcg_two_level_free,
                        pin_blas_to_one_thread)
 from .bundles import Pairs, WallSurface, pairs_of
 from .heap import keep_freed_memory
@@ -653,10 +653,9 @@ class IsphSolver:
         unknowns on: :mod:`.deflation`); the assembled matrix by SuperLU if it fails (:meth:`_solve_cg`)."""
         rtol = self.cfg.numerics.solver_rtol
         try:
-            if len(op) == 7 and rhs.size >= self.cfg.numerics.deflation_min_unknowns:
-                sol, it, info = pcg_ssor_deflated(*op, rhs, guess, rtol, 0.0, 1000)
-            elif len(op) == 7:
-                sol, it, info = pcg_dic_split(*op, rhs, guess, rtol, 0.0, 1000, -1.0)
+            if len(op) == 7:
+                sol, it, info = pcg_ssor_deflated(*op, rhs, guess, rtol, 0.0, 1000,
+                                                  self.cfg.numerics.deflation_min_unknowns)
             else:
                 sol, it, info = pcg_two_level_free(op, rhs, guess, rtol, 0.0, 1000)
         except (ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError) as exc:
