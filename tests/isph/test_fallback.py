@@ -119,7 +119,7 @@ def test_solver_nan_rhs_falls_back_and_the_nan_then_stops_the_run(monkeypatch, t
 
 
 @pytest.mark.parametrize("projection, cg, solver", [("approximate", "pcg_dic", "cg_dic"),
-                                                    ("adjoint_pair", "pcg_dic_split", "cg_dic"),
+                                                    ("adjoint_pair", "pcg_ssor_deflated", "cg_dic"),
                                                     ("adjoint_pair", "pcg_two_level", "cg_two_level"),
                                                     ("adjoint_pair/matrix_free", "pcg_two_level_free", "cg_two_level")])
 @pytest.mark.parametrize("mode", ["breakdown", "raise", "nan"])
