@@ -237,6 +237,16 @@ class Numerics:
                                       "by height) every this many steps: faster solves and neighbour loops; "
                                       "0 = never (the numbering of the initial lattice, as before); outputs keep "
                                       "the original particle index")
+    threads_mode: str = param("auto", choices=("auto", "overlap", "prange"),
+                              doc="with more than one numba thread (NUMBA_NUM_THREADS): overlap = the "
+                                  "adjoint-pair PPE's geometry (L_c, active set, the triangles) is built on "
+                                  "a second thread while the predictor runs, every kernel in its serial "
+                                  "build (two threads busy); prange = the per-particle kernels' numba "
+                                  "parallel builds, no overlap; auto = overlap on exactly two threads, "
+                                  "prange on more. Bit for bit the same results; on 2 cores overlap "
+                                  "measured 11-30 % faster per step than one thread at 3750-60000 "
+                                  "particles, prange slower at 3750 (docs/speed.md, session 17; more "
+                                  "than two threads not measured). One thread: no effect")
     max_steps: int = param(2_000_000, gt=0, doc="hard cap on the number of time steps")
     energy_limit: float = param(0.01, gt=0.0, le=10.0, unit="1",
                                 doc="stop the run (as a blow-up) when E_kin + E_pot + dissipated rises above "

@@ -685,7 +685,7 @@ def _pair_eisenstat_product(lp, li, lv, up, ui, uv, dinv_u, dinv_v, kd_u, kd_v, 
         qv[i] = wv[i] + tv[i]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
     """:func:`pcg_dic` on the u and v viscous systems in lock-step (A_v = A_u with diagonal
     ``diag_v``; diagonal first in each row): each side gives the same result as its own

@@ -47,8 +47,10 @@ class PrangeKernel:
 
     def __init__(self, fn):
         self.py_func = fn
-        self.parallel = njit(cache=True, parallel=PARALLEL)(fn)
-        self.serial = njit(cache=True)(_renamed_copy(fn, SERIAL_SUFFIX))
+        # nogil: the predictor's kernels run while a second Python thread builds the PPE geometry
+        # (solver._start_ppe_geometry)
+        self.parallel = njit(cache=True, nogil=True, parallel=PARALLEL)(fn)
+        self.serial = njit(cache=True, nogil=True)(_renamed_copy(fn, SERIAL_SUFFIX))
         functools.update_wrapper(self, fn)
 
     def build(self, threads: int | None = None):

@@ -22,6 +22,8 @@ instead of +20 %) and is not the default (docs/paper-notes.md, "Energy budget").
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import get_num_threads, njit, prange
 
@@ -151,7 +153,7 @@ def divergence_entries(pairs, nf, vol, lmat, walls):
     return rows, cols, cx, cy
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def compact_laplacian_edges(pairs, nf, vol, eps2, lap_norm):
     """Edges (i, j, a_ij) of the compact Laplacian L_c = Σ_e a_e (e_i − e_j)(e_i − e_j)ᵀ over the
     granular pairs (each once) and the granular–wall pairs; a_ij = 2 V F_ij r²/(r² + ε²)/lap_norm
@@ -179,9 +181,98 @@ def compact_laplacian_edges(pairs, nf, vol, eps2, lap_norm):
     return ei, ej, ea
 
 
+class PairGeometry(NamedTuple):
+    """What :func:`adjoint_pair_projection`'s first pass needs that does not depend on u*
+    (:func:`adjoint_pair_geometry`)."""
+    ei: np.ndarray          # L_c edges (compact_laplacian_edges)
+    ej: np.ndarray
+    ea: np.ndarray
+    wetted: np.ndarray      # wall nodes with a granular neighbour
+    active: np.ndarray      # the first pass's unknown nodes
+    p: np.ndarray           # the known pressures (free surface), zero elsewhere
+    triangles: tuple | None  # the first pass's PPE as its triangles (assemble_adjoint_triangles), or None
+
+
+def adjoint_pair_geometry(pairs, nf, nw, vol, fs, p_fs, eps2, lap_norm, stab, wall_dry, entries, triangles):
+    """The part of :func:`adjoint_pair_projection`'s first pass that does not depend on u*: the L_c
+    edges, the wetted walls and the active set, the known pressures and, with ``triangles``, the PPE
+    matrix as its triangles (its right-hand side is :func:`ppe_rhs`'s once u* is known). The solver
+    runs it beside the predictor on a second thread when numba has two (bit for bit the same)."""
+    rows = entries[0]
+    n = nf + nw
+    ei, ej, ea = compact_laplacian_edges(pairs, nf, vol, eps2, lap_norm)
+    wetted = np.zeros(nw, dtype=np.bool_)
+    wetted[np.unique(rows[rows >= nf] - nf)] = True
+    active = np.empty(n, dtype=np.bool_)
+    active[:nf] = ~fs
+    active[nf:] = wetted & ~wall_dry
+    p = np.zeros(n)
+    p[:nf] = np.where(fs, p_fs, 0.0)
+    tri = None
+    if triangles:
+        unknown, unk = _numbering(active)
+        if unk.size:
+            rows, cols, cx, cy = entries
+            tri = assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p,
+                                             np.zeros(n))[0]
+    return PairGeometry(ei, ej, ea, wetted, active, p, tri)
+
+
+def _numbering(active):
+    """unknown[node] (the unknown's index, −1 for a known node) and the unknown nodes."""
+    unknown = np.full(active.size, -1, np.int64)
+    unk = np.flatnonzero(active)
+    unknown[unk] = np.arange(unk.size)
+    return unknown, unk
+
+
+def _csr_builder(*args):
+    """``assemble()`` for the matrix-free solvers' direct fallback: the CSR of these
+    :func:`assemble_adjoint_ppe` arguments, built only when called."""
+    return lambda: assemble_adjoint_ppe(*args)[:3]
+
+
+@njit(cache=True, nogil=True)
+def ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+    """The right-hand side of :func:`matrix_free_ppe` (and of :func:`assemble_adjoint_triangles`)
+    alone, b_U − (1 − ε) D_U (D_Kᵀ p_K) − ε (L_c p_K)_U, bit for bit: the same additions in the
+    same order (each row's D_U sum in D's COO order, as the row CSR lists it)."""
+    wd = 1.0 - stab
+    rhs = np.empty(n_unknown)
+    for a in range(n):
+        if unknown[a] >= 0:
+            rhs[unknown[a]] = b[a]
+    for e in range(ei.size):
+        a = unknown[ei[e]]
+        c = unknown[ej[e]]
+        w = stab * ea[e]
+        if a >= 0 and c < 0:
+            rhs[a] += w * p[ej[e]]
+        if c >= 0 and a < 0:
+            rhs[c] += w * p[ei[e]]
+    gx = np.zeros(nf)
+    gy = np.zeros(nf)
+    known = False
+    for q in range(rows.size):
+        a = rows[q]
+        if unknown[a] < 0 and p[a] != 0.0:
+            gx[cols[q]] += cx[q] * p[a]
+            gy[cols[q]] += cy[q] * p[a]
+            known = True
+    if known:
+        s = np.zeros(n_unknown)
+        for q in range(rows.size):
+            r = unknown[rows[q]]
+            if r >= 0:
+                s[r] += cx[q] * gx[cols[q]] + cy[q] * gy[cols[q]]
+        for r in range(n_unknown):
+            rhs[r] -= wd * s[r]
+    return rhs
+
+
 def adjoint_pair_projection(pairs, nf, nw, vol, lmat, walls, fs, p_fs, us, vs, conc, c0, relax, dt, rho, eps2,
                             lap_norm, stab, guess, solve, wall_dry, max_passes=1, release=True, entries=None,
-                            solve_free=None, free_form="free"):
+                            solve_free=None, free_form="free", geometry=None):
     """Solve ((1 − ε) D Dᵀ + ε L_c) p = −(ρ/Δt) D u* + s on the interior granular and the wetted wall nodes
     (free-surface particles: p = ``p_fs``; dry or pulling walls: p = 0) and return the node
     pressures (nf + nw), the corrector's G p = −Dᵀ p (x and y), the wall nodes to keep dry at the
@@ -196,36 +287,39 @@ def adjoint_pair_projection(pairs, nf, nw, vol, lmat, walls, fs, p_fs, us, vs, c
     (:func:`divergence_entries` of these arguments) when the caller has it already. ``solve_free``:
     when given, the matrix is never assembled: ``solve_free(op, rhs, guess, assemble)`` gets the
     operator of :func:`matrix_free_ppe` (``assemble()`` returns the CSR, for a direct fallback), or
-    with ``free_form="triangles"`` the triangles of :func:`assemble_adjoint_triangles`."""
+    with ``free_form="triangles"`` the triangles of :func:`assemble_adjoint_triangles`. ``geometry``:
+    :func:`adjoint_pair_geometry` of these arguments when the caller has it already (computed beside
+    the predictor)."""
     n = nf + nw
     rows, cols, cx, cy = (entries if entries is not None else divergence_entries(pairs, nf, vol, lmat, walls))
-    ei, ej, ea = compact_laplacian_edges(pairs, nf, vol, eps2, lap_norm)
+    triangles = solve_free is not None and free_form == "triangles"
+    if geometry is None:
+        geometry = adjoint_pair_geometry(pairs, nf, nw, vol, fs, p_fs, eps2, lap_norm, stab, wall_dry,
+                                         (rows, cols, cx, cy), triangles)
+    ei, ej, ea, wetted = geometry.ei, geometry.ej, geometry.ea, geometry.wetted
+    active = geometry.active.copy()
+    p = geometry.p.copy()
     b = -(rho / dt) * apply_divergence(n, rows, cols, cx, cy, us, vs)
     b[:nf] -= relax * rho / (dt * dt) * np.minimum(1.0 - conc / c0, 0.0)
-    wetted = np.zeros(nw, dtype=np.bool_)
-    wetted[np.unique(rows[rows >= nf] - nf)] = True
-    active = np.empty(n, dtype=np.bool_)
-    active[:nf] = ~fs
-    active[nf:] = wetted & ~wall_dry
-    p = np.zeros(n)
-    p[:nf] = np.where(fs, p_fs, 0.0)
     released = 0
     pull = np.zeros(0, np.int64)
     for k in range(max_passes):
-        unknown = np.full(n, -1, np.int64)
-        unk = np.flatnonzero(active)
-        unknown[unk] = np.arange(unk.size)
+        unknown, unk = _numbering(active)
         if unk.size == 0:
             break
         p[unk] = 0.0
-        if solve_free is not None:
+        if k == 0 and triangles:
+            # the first pass's triangles come with the geometry; only the right-hand side needs u*
+            op = geometry.triangles
+            rhs = ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b)
+            p[unk] = solve_free(op, rhs, guess[unk], _csr_builder(n, rows, cols, cx, cy, nf, ei, ej, ea, stab,
+                                                                   unknown, unk.size, p.copy(), b))
+        elif solve_free is not None:
             # matrix-free (numerics.ppe_operator): the same operator applied as D_U (D_Uᵀ x) + ε L_c x
             build = assemble_adjoint_triangles if free_form == "triangles" else matrix_free_ppe
             op, rhs = build(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b)
-
-            def assemble(unknown=unknown, m=unk.size, p=p.copy()):
-                return assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, m, p, b)[:3]
-            p[unk] = solve_free(op, rhs, guess[unk], assemble)
+            p[unk] = solve_free(op, rhs, guess[unk], _csr_builder(n, rows, cols, cx, cy, nf, ei, ej, ea, stab,
+                                                                   unknown, unk.size, p.copy(), b))
         else:
             indptr, indices, data, rhs = assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown,
                                                               unk.size, p, b)
@@ -564,11 +658,6 @@ def _matrix_free_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unk
     lf = lptr[:-1] + 1
     for r in range(n_unknown):
         lcol[lptr[r]] = r
-    # the right-hand side: b_U − (1 − ε) D_U (D_Kᵀ p_K) − ε (L_c p_K)_U
-    rhs = np.empty(n_unknown)
-    for a in range(n):
-        if unknown[a] >= 0:
-            rhs[unknown[a]] = b[a]
     for e in range(ei.size):
         a = unknown[ei[e]]
         c = unknown[ej[e]]
@@ -579,38 +668,21 @@ def _matrix_free_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unk
                 lcol[lf[a]] = c
                 lval[lf[a]] = -w
                 lf[a] += 1
-            else:
-                rhs[a] += w * p[ej[e]]
         if c >= 0:
             lval[lptr[c]] += w
             if a >= 0:
                 lcol[lf[c]] = a
                 lval[lf[c]] = -w
                 lf[c] += 1
-            else:
-                rhs[c] += w * p[ei[e]]
-    gx = np.zeros(nf)
-    gy = np.zeros(nf)
-    known = False
-    for q in range(rows.size):
-        a = rows[q]
-        if unknown[a] < 0 and p[a] != 0.0:
-            gx[cols[q]] += cx[q] * p[a]
-            gy[cols[q]] += cy[q] * p[a]
-            known = True
-    if known:
-        for r in range(n_unknown):
-            s = 0.0
-            for k in range(rptr[r], rptr[r + 1]):
-                s += rx[k] * gx[rcol[k]] + ry[k] * gy[rcol[k]]
-            rhs[r] -= wd * s
+    # the right-hand side: b_U − (1 − ε) D_U (D_Kᵀ p_K) − ε (L_c p_K)_U
+    rhs = ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b)
     return (wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval), rhs
 
 
 matrix_free_ppe = _matrix_free_ppe
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
     """The matrix of :func:`assemble_adjoint_ppe` as its strict lower and upper triangles and its
     diagonal, in :func:`linsolve.split_triangles`' layout (uint64 row pointers, uint32 columns, the

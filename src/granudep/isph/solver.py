@@ -25,9 +25,11 @@ from __future__ import annotations
 
 import math
 import time as _time
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -39,8 +41,8 @@ from . import operators, ppe, shifting, viscous, walls
 from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_work, viscous_dissipation
 from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
-from .projection import (adjoint_divergence, adjoint_pair_projection, apply_gradient, divergence_entries,
-                         wall_normal_acceleration)
+from .projection import (adjoint_divergence, adjoint_pair_geometry, adjoint_pair_projection, apply_gradient,
+                         divergence_entries, wall_normal_acceleration)
 from .deflation import pcg_ssor_deflated
 from .linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pcg_two_level,
                        pcg_two_level_free,
@@ -49,6 +51,18 @@ from .bundles import Pairs, WallSurface, pairs_of
 from .heap import keep_freed_memory
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
                     reference_laplacian_sum)
+
+
+#: the thread that builds the PPE geometry beside the predictor (:meth:`IsphSolver._start_ppe_geometry`),
+#: started on first use; module-level, so that a pickled solver carries no thread
+_PPE_THREAD: ThreadPoolExecutor | None = None
+
+
+def _ppe_thread() -> ThreadPoolExecutor:
+    global _PPE_THREAD
+    if _PPE_THREAD is None:
+        _PPE_THREAD = ThreadPoolExecutor(max_workers=1, thread_name_prefix="granudep-ppe")
+    return _PPE_THREAD
 
 
 class IsphBlowUp(RuntimeError):
@@ -256,7 +270,22 @@ class IsphSolver:
         return dt
 
     def step(self, dt: float) -> None:
-        """One time step (module doc): a recipe of named, timed stages."""
+        """One time step (module doc): a recipe of named, timed stages. With ``numerics.threads_mode:
+        overlap`` on more than one numba thread (``auto``: on exactly two), the step's kernels run their
+        serial builds in this thread (numba's thread count is per thread) and the PPE geometry is built
+        on a second one."""
+        threads = numba.get_num_threads()
+        mode = self.cfg.numerics.threads_mode
+        if threads == 1 or mode == "prange" or (mode == "auto" and threads > 2):
+            self._step(dt, False)
+            return
+        numba.set_num_threads(1)
+        try:
+            self._step(dt, True)
+        finally:
+            numba.set_num_threads(threads)
+
+    def _step(self, dt: float, overlap: bool) -> None:
         t0 = _time.perf_counter()
         nb = self._neighbours()
         t1 = _time.perf_counter()
@@ -269,6 +298,7 @@ class IsphSolver:
         dmat = self._divergence_matrix(nb, geo, lmat_p)
         gp_old = self._old_pressure_gradient(dmat)
         t_div = _time.perf_counter()
+        ppe_geo = self._start_ppe_geometry(nb, dmat, overlap)
         us, vs = self._predictor(nb, geo, dt, gp_old)
         if gp_old is not None:
             # the projection sees the velocity without the old pressure impulse, so that it solves
@@ -277,7 +307,7 @@ class IsphSolver:
             vs = vs + dt / self.rho * gp_old[1]
         t3 = _time.perf_counter()
         u_old, v_old = self.u, self.v
-        self._projection(nb, geo, lmat_p, dmat, us, vs, dt)
+        self._projection(nb, geo, lmat_p, dmat, us, vs, dt, ppe_geo)
         t4 = _time.perf_counter()
         self._shift_and_move(nb, geo, u_old, v_old, us, vs, dt)
         t5 = _time.perf_counter()
@@ -480,10 +510,33 @@ class IsphSolver:
             walls.stress_limited_drag(nf, self.u, self.v, kns, self.p_rheo, self.wall_an, self.planes, self.mu_wall,
                                       self.dx, dt, self.rho, self.u_eps, diag_u, diag_v)
 
-    def _projection(self, nb: Pairs, geo: Geometry, lmat_p, dmat, us, vs, dt: float) -> None:
+    def _start_ppe_geometry(self, nb: Pairs, dmat, overlap: bool = False):
+        """Stage 2c (adjoint pair): what the projection's PPE needs before u* is known
+        (:func:`projection.adjoint_pair_geometry`: the L_c edges, the active set, the triangles). With
+        ``overlap`` (:meth:`step`: ``numerics.threads_mode`` and the numba thread count)
+        it is built on a second thread while the predictor runs (a Future; the two
+        stages share no data and every kernel of both releases the GIL), else here; the same result
+        bit for bit either way (``numerics.threads_mode``). None with the approximate projection."""
+        if dmat is None:
+            return None
+        nf = self.nf
+        nw = self.parts.wnx.size
+        if self.p_wall is None or self.p_wall.size != nw:
+            self.p_wall = np.zeros(nw)
+        if self.wall_dry is None or self.wall_dry.size != nw:
+            self.wall_dry = np.zeros(nw, dtype=bool)
+        args = (nb, nf, nw, self.vol, self.fs, self.p_fs, self.eps2, self.lap_norm,
+                self.cfg.numerics.projection_stabilisation, self.wall_dry, dmat, self._ppe_form == "triangles")
+        if overlap:
+            return _ppe_thread().submit(adjoint_pair_geometry, *args)
+        return adjoint_pair_geometry(*args)
+
+    def _projection(self, nb: Pairs, geo: Geometry, lmat_p, dmat, us, vs, dt: float, ppe_geo=None) -> None:
         """Stage 4: the pressure projection of u* (adjoint pair or approximate): pⁿ⁺¹ and uⁿ⁺¹."""
         if self.cfg.numerics.projection == "adjoint_pair":
-            self._project_adjoint_pair(nb, lmat_p, dmat, geo.conc, us, vs, dt)
+            if isinstance(ppe_geo, Future):
+                ppe_geo = ppe_geo.result()
+            self._project_adjoint_pair(nb, lmat_p, dmat, geo.conc, us, vs, dt, ppe_geo)
         else:
             self._project_approximate(nb, geo.lmat, lmat_p, geo.conc, us, vs, dt,
                                       geo.detached)
@@ -545,7 +598,7 @@ class IsphSolver:
         self.u = us - dt / rho * gpx
         self.v = vs - dt / rho * gpy
 
-    def _project_adjoint_pair(self, nb: Pairs, lmat_p, dmat, conc, us, vs, dt):
+    def _project_adjoint_pair(self, nb: Pairs, lmat_p, dmat, conc, us, vs, dt, ppe_geo=None):
         """Adjoint-pair projection (:func:`projection.adjoint_pair_projection`): G = −Dᵀ, walls carry
         pressure; the pressure cannot raise the kinetic energy except through the free-surface
         Dirichlet value and the density source (docs/paper-notes.md, session 6)."""
@@ -562,7 +615,8 @@ class IsphSolver:
             self.density_relaxation(dt), dt, self.rho, self.eps2, self.lap_norm,
             c.numerics.projection_stabilisation, guess, self._solve_ppe, self.wall_dry,
             release=c.numerics.wall_release, entries=dmat,
-            solve_free=self._solve_ppe_free if self._ppe_form != "csr" else None, free_form=self._ppe_form)
+            solve_free=self._solve_ppe_free if self._ppe_form != "csr" else None, free_form=self._ppe_form,
+            geometry=ppe_geo)
         self.stats.walls_released += released
         self.p = p[:nf]
         self.p_wall = p[nf:]
