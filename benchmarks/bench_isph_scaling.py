@@ -18,7 +18,9 @@ Run (one command per figure set):
   python benchmarks/bench_isph_scaling.py --threads 1,2 --solvers cg_two_level,cg_dic   (issue 26's figures, docs/speed.md)
       [--set numerics.projection=approximate]   (scheme options of the timed steps; default: adjoint pair)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py ...
-  python benchmarks/bench_isph_scaling.py --threads 1,2      (one subprocess per thread count, interleaved)
+  python benchmarks/bench_isph_scaling.py --threads 1,2      (one subprocess per thread count, interleaved;
+      two threads: numerics.threads_mode auto = the PPE geometry beside the predictor, session 17;
+      --set numerics.threads_mode=prange for the kernels' parallel builds instead)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py --to-rest 2,1   (T22-A70 to rest, wall time)
       [--set numerics.deflation_min_unknowns=1000000000000]   (scheme options also apply to --to-rest)
 Timings on a shared machine are noisy: ``--repeats`` runs the same steps again from the
@@ -257,8 +259,9 @@ def per_step(args) -> None:
 
 
 #: T22-A70 at dx = 1 mm: particles and steps to rest with the default (no-slip) bed, measured in
-#: session 15 (`--to-rest 1`: at rest at 12.57 t_c after 6109 steps, 1757 s on one thread). Session
-#: 10's Coulomb-bed run needed 13 877 steps (README "A 1 mm rung").
+#: session 15 (`--to-rest 1`: at rest at 12.57 t_c after 6109 steps, 1757 s on one thread; session 17,
+#: the deflated PPE: 6126 steps, 1224.7 s). Session 10's Coulomb-bed run needed 13 877 steps (README
+#: "A 1 mm rung").
 N_1MM, STEPS_1MM = 28_000, 6_109
 
 
@@ -281,8 +284,11 @@ def print_targets(solver: str, ns, ts, cpus=None) -> None:
             k = math.log(t1 / t0) / math.log(n1 / n0)
             est = t0 * (N_1MM / n0) ** k
             minutes = est * STEPS_1MM / 6e4
+            # a proxy (T22-A150's developed flow, not T22-A70's phases): session 17 estimated 19.8 min and
+            # measured 20.4 (--to-rest 1), session 15 estimated 20.7 and measured 29.3; only a run decides
             print(f"  target {solver} ({label}): T22-A70 at 1 mm to rest <= 20 min: estimated {est:.0f} ms/step at "
-                  f"{N_1MM} particles x {STEPS_1MM} steps = {minutes:.1f} min, {'met' if minutes <= 20.0 else 'not met'}")
+                  f"{N_1MM} particles x {STEPS_1MM} steps = {minutes:.1f} min "
+                  f"({'below' if minutes <= 20.0 else 'above'} 20 min; an estimate: measure with --to-rest 1)")
 
 
 def to_rest(args) -> None:
