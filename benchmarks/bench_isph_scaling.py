@@ -177,8 +177,9 @@ def _install_part_timers() -> None:
                 PARTS[key] = PARTS.get(key, 0.0) + time.perf_counter() - t0
         setattr(owner, name, g)
     wrap(projection, "assemble_adjoint_ppe", "ppe_assembly")
-    wrap(projection, "matrix_free_ppe", "ppe_assembly")
-    wrap(projection, "assemble_adjoint_triangles", "ppe_assembly")
+    wrap(projection, "matrix_free_operator", "ppe_assembly")
+    wrap(projection, "adjoint_triangles", "ppe_assembly")
+    wrap(projection, "ppe_rhs", "ppe_assembly")
     wrap(solmod.IsphSolver, "_solve_ppe", "ppe_solve")
     wrap(solmod.IsphSolver, "_solve_ppe_free", "ppe_solve")
     wrap(viscous, "assemble_viscous", "visc_assembly")

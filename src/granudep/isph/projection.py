@@ -213,8 +213,7 @@ def adjoint_pair_geometry(pairs, nf, nw, vol, fs, p_fs, eps2, lap_norm, stab, wa
         unknown, unk = _numbering(active)
         if unk.size:
             rows, cols, cx, cy = entries
-            tri = assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p,
-                                             np.zeros(n))[0]
+            tri = adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size)
     return PairGeometry(ei, ej, ea, wetted, active, p, tri)
 
 
@@ -234,9 +233,8 @@ def _csr_builder(*args):
 
 @njit(cache=True, nogil=True)
 def ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
-    """The right-hand side of :func:`matrix_free_ppe` (and of :func:`assemble_adjoint_triangles`)
-    alone, b_U − (1 − ε) D_U (D_Kᵀ p_K) − ε (L_c p_K)_U, bit for bit: the same additions in the
-    same order (each row's D_U sum in D's COO order, as the row CSR lists it)."""
+    """The right-hand side of the PPE on the unknowns, b_U − (1 − ε) D_U (D_Kᵀ p_K) − ε (L_c p_K)_U,
+    for the matrix-free operator and the triangles (each row's D_U sum in D's COO order)."""
     wd = 1.0 - stab
     rhs = np.empty(n_unknown)
     for a in range(n):
@@ -308,16 +306,15 @@ def adjoint_pair_projection(pairs, nf, nw, vol, lmat, walls, fs, p_fs, us, vs, c
         if unk.size == 0:
             break
         p[unk] = 0.0
-        if k == 0 and triangles:
-            # the first pass's triangles come with the geometry; only the right-hand side needs u*
-            op = geometry.triangles
+        if solve_free is not None:
+            if k == 0 and triangles:
+                op = geometry.triangles      # built before u* was known (it does not depend on it)
+            else:
+                # the triangles again for a changed active set, or the matrix-free operator
+                # (numerics.ppe_operator): the same operator applied as D_U (D_Uᵀ x) + ε L_c x
+                build = adjoint_triangles if triangles else matrix_free_operator
+                op = build(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size)
             rhs = ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b)
-            p[unk] = solve_free(op, rhs, guess[unk], _csr_builder(n, rows, cols, cx, cy, nf, ei, ej, ea, stab,
-                                                                   unknown, unk.size, p.copy(), b))
-        elif solve_free is not None:
-            # matrix-free (numerics.ppe_operator): the same operator applied as D_U (D_Uᵀ x) + ε L_c x
-            build = assemble_adjoint_triangles if free_form == "triangles" else matrix_free_ppe
-            op, rhs = build(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b)
             p[unk] = solve_free(op, rhs, guess[unk], _csr_builder(n, rows, cols, cx, cy, nf, ei, ej, ea, stab,
                                                                    unknown, unk.size, p.copy(), b))
         else:
@@ -598,12 +595,12 @@ def wall_normal_acceleration(pairs, nf, vol, lmat, walls, p, rho, planes):
 # ------------------------------------------------------------------------------------------------
 
 
-@njit(cache=True)
-def _matrix_free_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
-    """The operator ((1 − ε) D Dᵀ + ε L_c) restricted to the unknown nodes, unassembled, and its
-    right-hand side b_U − A_UK p_K (the same system as :func:`assemble_adjoint_ppe`).
+@njit(cache=True, nogil=True)
+def matrix_free_operator(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown):
+    """The operator ((1 − ε) D Dᵀ + ε L_c) restricted to the unknown nodes, unassembled (the matrix
+    of :func:`assemble_adjoint_ppe`; its right-hand side is :func:`ppe_rhs`'s).
 
-    Returns (op, rhs); op = (wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval): D_U by
+    Returns op = (wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval): D_U by
     unknown row (columns: particles) and by particle (rows: unknown indices), both CSR, wd = 1 − ε;
     ε L_c restricted to the unknowns by row with its diagonal first (``lval`` holds ε a_e; the
     diagonal sums the edges to known nodes too). See :func:`linsolve.free_matvec`."""
@@ -674,27 +671,38 @@ def _matrix_free_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unk
                 lcol[lf[c]] = a
                 lval[lf[c]] = -w
                 lf[c] += 1
-    # the right-hand side: b_U − (1 − ε) D_U (D_Kᵀ p_K) − ε (L_c p_K)_U
-    rhs = ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b)
-    return (wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval), rhs
+    return (wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval)
 
 
-matrix_free_ppe = _matrix_free_ppe
+@njit(cache=True)
+def matrix_free_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+    """(op, rhs): :func:`matrix_free_operator` and :func:`ppe_rhs` (the same system as
+    :func:`assemble_adjoint_ppe`)."""
+    return (matrix_free_operator(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown),
+            ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b))
+
+
+@njit(cache=True)
+def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+    """(triangles, rhs): :func:`adjoint_triangles` and :func:`ppe_rhs`."""
+    return (adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown),
+            ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b))
 
 
 @njit(cache=True, nogil=True)
-def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+def adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown):
     """The matrix of :func:`assemble_adjoint_ppe` as its strict lower and upper triangles and its
     diagonal, in :func:`linsolve.split_triangles`' layout (uint64 row pointers, uint32 columns, the
-    lower rows by ascending and the upper rows by descending column), and its right-hand side; for
-    the SSOR-preconditioned CG (``numerics.pressure_solver: cg_ssor``, :func:`linsolve.pcg_dic_split`).
+    lower rows by ascending and the upper rows by descending column); for the SSOR-preconditioned
+    CG (``numerics.pressure_solver: cg_ssor``, :func:`linsolve.pcg_dic_split`). It does not depend on
+    the right-hand side, so it can be built before u* is known (:func:`adjoint_pair_geometry`).
 
     Only the upper triangle is computed (the product is symmetric): row a takes, for each particle
     i of its D_U row, the nodes b > a of column i (the columns sorted by node, each entered at a head that
     only moves forward as a grows),
     plus its L_c entries b > a; the lower triangle is its transpose. Half the multiply-adds of the
-    row-by-row product and no CSR to split. Returns (lp, li, lv, up, ui, uv, diag, rhs)."""
-    op, rhs = _matrix_free_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b)
+    row-by-row product and no CSR to split. Returns (lp, li, lv, up, ui, uv, diag)."""
+    op = matrix_free_operator(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown)
     wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval = op
     m = n_unknown
     # each column by ascending node (insertion sort: the columns come nearly sorted)
@@ -794,4 +802,4 @@ def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unkn
             ui[fill[a]] = c
             uv[fill[a]] = lv[k]
             fill[a] += 1
-    return (lp.astype(np.uint64), li, lv, up.astype(np.uint64), ui[:pos], uv[:pos], diag), rhs
+    return lp.astype(np.uint64), li, lv, up.astype(np.uint64), ui[:pos], uv[:pos], diag

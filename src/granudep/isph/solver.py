@@ -605,11 +605,7 @@ class IsphSolver:
         c = self.cfg
         nf = self.nf
         nw = self.parts.wnx.size
-        if self.p_wall is None or self.p_wall.size != nw:
-            self.p_wall = np.zeros(nw)
-        guess = np.concatenate((self.p, self.p_wall))
-        if self.wall_dry is None or self.wall_dry.size != nw:
-            self.wall_dry = np.zeros(nw, dtype=bool)
+        guess = np.concatenate((self.p, self.p_wall))      # p_wall, wall_dry: set in _start_ppe_geometry
         p, gpx, gpy, self.wall_dry, released = adjoint_pair_projection(
             nb, nf, nw, self.vol, lmat_p, self.wall_surface, self.fs, self.p_fs, us, vs, conc, self.c0,
             self.density_relaxation(dt), dt, self.rho, self.eps2, self.lap_norm,
