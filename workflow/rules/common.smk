@@ -9,7 +9,9 @@ from snakemake.exceptions import WorkflowError
 # .venv/bin/snakemake without activating the environment).
 os.environ["PATH"] = os.path.dirname(sys.executable) + os.pathsep + os.environ.get("PATH", "")
 
-RESULTS = "results"
+# every output under one folder (config results_dir): results, or results/variants/<name> for a
+# variant chain (config/variants/*.yaml), whose scorecard the reproduction's summary shows
+RESULTS = config.get("results_dir", "results")
 
 # Our numbers quoted in the report captions (workflow/report/*.rst read
 # snakemake.config["_caption_numbers"][...]): written from the outputs by the summary rule, read

@@ -48,18 +48,37 @@ class Material:
     rho_s: float = param(_GB["rho_s"], gt=0.0, unit="kg m-3", doc="grain density (Table 2)")
     rho: float = param(_GB["rho"], gt=0.0, unit="kg m-3", doc="bulk density of the continuum (Table 2)")
     phi_internal_deg: float = param(_GB["phi_internal_deg"], gt=0.0, lt=90.0, unit="deg", was="phi_deg",
-                                    doc="internal friction angle phi_I; mu_s = tan(phi_I)")
+                                    doc="internal friction angle phi_I; mu_s from it by material.mu_s_form")
     mu_2: float = param(0.73, gt=0.0, unit="1", doc="limiting friction at large I (paper: 'mu_s ~ 0.73')")
-    I0: float = param(0.279, gt=0.0, unit="1", doc="inertial-number scale (Ionescu et al. 2015)")
+    I0: float = param(0.279, gt=0.0, unit="1", doc="inertial-number scale (Ionescu et al. 2015), for the I of "
+                                                   "material.inertial_number")
+    mu_s_form: str = param("tan_phi", choices=("tan_phi", "sin_phi"),
+                           doc="static friction of the mu(I) law: tan_phi (mu_s = tan phi_I, the paper's text, "
+                               "Section 2.1) or sin_phi (mu_s = sin phi_I, the Drucker-Prager plane-strain match "
+                               "of the authors' published code, Nikooei-Data Granularmaterial3, after Ionescu et al. "
+                               "2015: 0.4305 against 0.4770 at 25.5 deg)")
+    inertial_number: str = param("standard", choices=("standard", "doubled"),
+                                 doc="inertial number of eq 4: standard, I = |gamma_dot| d / sqrt(p/rho_s) (the "
+                                     "paper's text), or doubled, I = 2 |gamma_dot| d / sqrt(p/rho_s) (the authors' "
+                                     "published code; with I0 = 0.279 it is the standard law with I0 = 0.1395)")
 
     @property
     def mu_s(self) -> float:
-        return math.tan(math.radians(self.phi_internal_deg))
+        """μ_s of the μ(I) law (``mu_s_form``)."""
+        phi = math.radians(self.phi_internal_deg)
+        return math.sin(phi) if self.mu_s_form == "sin_phi" else math.tan(phi)
+
+    @property
+    def I0_standard(self) -> float:
+        """I0 of the law written with the standard inertial number: μ(I) with I doubled and I0 is
+        μ(I) with the standard I and I0/2 (``inertial_number``)."""
+        return 0.5 * self.I0 if self.inertial_number == "doubled" else self.I0
 
     def validate(self, prefix: str) -> None:
         p = f"{prefix}." if prefix else ""
         if self.mu_2 <= self.mu_s:
-            raise ConfigError(f"{p}mu_2: must be > mu_s = tan(phi_internal_deg) = {self.mu_s:.4f} (got {self.mu_2})")
+            raise ConfigError(f"{p}mu_2: must be > mu_s = {self.mu_s_form.replace('_', '(')}_internal_deg) = "
+                              f"{self.mu_s:.4f} (got {self.mu_2})")
         if self.rho > self.rho_s:
             raise ConfigError(f"{p}rho: must be <= rho_s = {self.rho_s} (got {self.rho})")
 
@@ -99,15 +118,22 @@ class Rheology:
 
 @dataclass(frozen=True)
 class Wall:
-    slip: str = param("no_slip", choices=("no_slip", "navier", "free_slip", "coulomb", "mu_w_i", "stress_limited"),
-                      doc="bed law (basal and back wall): no_slip (u_w = 0), navier (slip length b), free_slip, "
-                          "coulomb (friction tan phi_B times the walls' normal stress on the first layer), "
-                          "mu_w_i (rate-dependent friction mu(I_w), the bulk mu(I) law at the wall, I_w from the "
-                          "slip speed sheared over slip_shear_length), stress_limited (no slip while the wall "
-                          "shear stress stays below tan phi_B p_w, Coulomb sliding beyond: our reading of the "
-                          "paper's stress-based slip velocity). Default no_slip since session 12 (a rough bed, "
-                          "as Farin et al. 2014's; coulomb before); docs/paper-notes.md, 'Bed laws'")
-    slip_length: float = param(0.0, ge=0.0, unit="m", doc="Navier slip length b (slip = navier)")
+    slip: str = param("navier", choices=("no_slip", "navier", "navier_overwrite", "free_slip", "coulomb", "mu_w_i",
+                                         "stress_limited"),
+                      doc="bed law (basal and back wall). navier (default): the paper's basal slip velocity "
+                          "(Section 4.1, after Nikooei & Manzari 2020), a Navier slip u_s = slip_length (I - n n).gamma_dot.n "
+                          "(the authors' published code), as a wall stress eta u_1/(d_1 + slip_length) on the first "
+                          "layer in the implicit viscous step; no_slip (u_w = 0: a rough bed); navier_overwrite (the "
+                          "authors' discrete form: the first layer's velocity replaced by slip_length (I - n n).gamma_dot.n "
+                          "after the projection, explicit; unstable for slip_length > 2 dx); free_slip; coulomb (friction "
+                          "tan phi_B times the walls' normal stress on the first layer); mu_w_i (the bulk mu(I) law at the "
+                          "wall, I_w from the slip speed sheared over slip_shear_length); stress_limited (no slip while the "
+                          "wall shear stress stays below tan phi_B p_w, Coulomb sliding beyond). docs/model.md, 'Bed law "
+                          "and basal slip'")
+    slip_length: float = param(0.018, ge=0.0, le=1.0, unit="m",
+                               doc="Navier slip length L_s (slip = navier, navier_overwrite): 0.018 m, the only value the "
+                                   "authors published (Nikooei-Data projection.cpp, 'Ls'); the value of the paper's "
+                                   "glass-bead runs is not published")
     slip_shear_length: float | None = param(None, gt=0.0, unit="m",
                                             doc="slip = mu_w_i: length over which the slip speed shears, "
                                                 "I_w = (|u_slip|/l) d / sqrt(p_w/rho_s); null = material.d "
@@ -117,13 +143,13 @@ class Wall:
     bed_stress: str = param("bed", choices=("bed", "centre", "hydrostatic", "wall"),
                             doc="slip = no_slip, navier with mu(I): the viscous wall stress of the first layer at "
                                 "the bed's normal stress (bed: eta_i p_w/p_i, p_w = rho a_n dx from the walls' "
-                                "reaction, never below p_i) or at the particle centre (centre: sessions 1-11; a sheet "
+                                "reaction, never below p_i) or at the particle centre (centre: a sheet "
                                 "one particle thick holds half its weight and slides on). The bed stress needs the "
                                 "walls' reaction (numerics.projection: adjoint_pair); with the approximate projection "
                                 "the centre stress is used. hydrostatic: the first layer's pressure extrapolated to "
-                                "the wall, p_i + rho g_n d_i (session 12 diagnostic, not the default). wall: mu(I) evaluated "
+                                "the wall, p_i + rho g_n d_i (a diagnostic). wall: mu(I) evaluated "
                                 "at the wall itself, p_w = rho a_n dx and the wall's own shear rate rho dx (k_i/eta_i) "
-                                "|u_t| (session 13; best on layers >= 10 particles, no better on 2-4-particle sheets)")
+                                "|u_t| (best on layers >= 10 particles, no better on 2-4-particle sheets)")
     stick_speed: float = param(1.0e-4, gt=0.0, unit="m s-1",
                                doc="Coulomb regularisation: below this tangential speed the wall friction is a stiff drag")
     contact_length: str = param("voronoi", choices=("voronoi", "dx"),
@@ -200,7 +226,7 @@ class Numerics:
                                      "iterates bit for bit), CG with diagonal incomplete Cholesky (Eisenstat; "
                                      "~2.5x fewer iterations, ~2x faster, true-residual stopping test; with "
                                      "projection adjoint_pair, where incomplete Cholesky breaks down, cg_dic "
-                                     "means cg_ssor since issue 26, cg_two_level before), two-level CG (Jacobi + "
+                                     "means cg_ssor), two-level CG (Jacobi + "
                                      "an aggregation coarse space; "
                                      "dx-independent iterations), or CG "
                                      "preconditioned by an algebraic-multigrid V-cycle (pyamg, optional package: "
@@ -245,7 +271,7 @@ class Numerics:
                                   "parallel builds, no overlap; auto = overlap on exactly two threads, "
                                   "prange on more. Bit for bit the same results; on 2 cores overlap "
                                   "measured 11-30 % faster per step than one thread at 3750-60000 "
-                                  "particles, prange slower at 3750 (docs/speed.md, session 17; more "
+                                  "particles, prange slower at 3750 (docs/performance.md; more "
                                   "than two threads not measured). One thread: no effect")
     max_steps: int = param(2_000_000, gt=0, doc="hard cap on the number of time steps")
     energy_limit: float = param(0.01, gt=0.0, le=10.0, unit="1",
@@ -293,6 +319,13 @@ class IsphConfig:
                 raise ConfigError(f"geometry.theta_deg: must be < {key} = {phi} for a column on a bed "
                                   f"(no rest is possible on a slope steeper than the friction angle; "
                                   f"got {g.theta_deg})")
+        if self.wall.slip in ("navier", "navier_overwrite") and not self.wall.slip_length > 0:
+            raise ConfigError(f"wall.slip_length: must be > 0 for wall.slip: {self.wall.slip} (got "
+                              f"{self.wall.slip_length}); a wall without slip is wall.slip: no_slip")
+        if self.wall.slip == "navier_overwrite" and self.wall.slip_length > 2.0 * n.dx:
+            raise ConfigError(f"wall.slip_length: must be <= 2 dx = {2.0 * n.dx:g} m for wall.slip: navier_overwrite "
+                              f"(got {self.wall.slip_length}): the explicit overwrite amplifies the first layer's "
+                              f"velocity beyond that and the run blows up (docs/model.md); use wall.slip: navier")
         reaction = self.wall.coulomb_normal == "projection" or (self.wall.coulomb_normal == "auto"
                                                                 and n.projection == "adjoint_pair")
         if self.wall.slip in ("mu_w_i", "stress_limited") and not reaction:
@@ -391,6 +424,11 @@ def case_geometry(name: str) -> dict:
     raise ConfigError(f"case: unknown case {name!r} (allowed: {', '.join(case_names())}, or a YAML file)")
 
 
+#: material keys that choose how the friction law reads the material, not the material itself: a paper
+#: case keeps its name under either convention (a study of the paper's model, not another material)
+MODEL_CONVENTIONS = ("mu_s_form", "inertial_number")
+
+
 def _check_paper_identity(cfg: "IsphConfig") -> None:
     """A paper case name stands for the paper's geometry and material: a run that changes either
     must carry its own name (it would be written to results/isph/{case}.nc labelled as the paper's)."""
@@ -400,7 +438,8 @@ def _check_paper_identity(cfg: "IsphConfig") -> None:
     changed = [(f"geometry.{k}", getattr(cfg.geometry, k), v) for k, v in ref_geo.items()
                if not math.isclose(getattr(cfg.geometry, k), v, rel_tol=1e-9, abs_tol=1e-12)]
     for sec, obj, ref in (("material", cfg.material, Material()), ("wall", cfg.wall, Wall())):
-        keys = [f.name for f in dataclasses.fields(ref)] if sec == "material" else ["phi_basal_deg"]
+        keys = ([f.name for f in dataclasses.fields(ref) if f.name not in MODEL_CONVENTIONS] if sec == "material"
+                else ["phi_basal_deg"])
         changed += [(f"{sec}.{k}", getattr(obj, k), getattr(ref, k)) for k in keys
                     if getattr(obj, k) != getattr(ref, k)]
     if changed:

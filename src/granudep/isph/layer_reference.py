@@ -43,7 +43,7 @@ class LayerMaterial:
     @classmethod
     def from_config(cls, cfg) -> "LayerMaterial":
         m = cfg.material
-        return cls(m.rho, m.rho_s, m.d, m.mu_s, m.mu_2, m.I0, cfg.rheology.eta_max)
+        return cls(m.rho, m.rho_s, m.d, m.mu_s, m.mu_2, m.I0_standard, cfg.rheology.eta_max)
 
 
 def face_pressure(h: float, n_cells: int, theta: float, rho: float) -> np.ndarray:

@@ -81,15 +81,17 @@ def reference_laplacian_sum(h: float, dx: float, eps2: float) -> float:
     return float(sum(2.0 * dx * dx * (-wendland_dwdr(float(ri), h)) * ri / (ri * ri + eps2) for ri in r))
 
 
-def lattice_constants(h_factor: float, eps_factor: float, layers: int) -> dict:
+def lattice_constants(h_factor: float, eps_factor: float, layers: int, slip_length: float = 0.0) -> dict:
     """Discrete moments of the Morris/Cummins Laplacian on the initial square lattice (dx = 1).
 
     * ``lap``: Σ_j V F_ij y_ij² (continuum value 1; 0.963 for h = 1.3 dx): the Laplacian
       coefficients are divided by it, so that the discrete operator is exact for quadratic fields;
-    * ``wall_ns``: Σ_layers d_i Σ_w V F_iw β_iw (continuum 1): wall shear stress of the Morris
-      no-slip extrapolation for a linear shear profile; wall terms are divided by it;
-    * ``wall_k``: Σ_layers Σ_w 2 V F_iw β_iw: the sum that turns a Coulomb wall stress into the pair
-      viscosity η_w = μ_B p_w dx/(wall_k |u_t|).
+    * ``wall_ns``: Σ_layers (d_i + b) Σ_w V F_iw β_iw (continuum 1): wall shear stress of the Morris
+      extrapolation (β capped at 1.5) for the linear profile u = y + b of a Navier wall with slip
+      length b = ``slip_length`` (in dx; 0 = no slip); wall terms are divided by it, so that the
+      discrete wall stress of that profile is η du/dy whatever b. The cap acts on the first layer
+      only when b < dx: normalised by the no-slip sum (0.71 for h = 1.3 dx), a Navier wall with
+      b ≥ dx had 1.35 times its stress, i.e. an effective slip length (d_1 + b)/1.35 − d_1 ≈ 0.73 b.
     """
     from ..kernels import wendland_dwdr
     h = h_factor
@@ -103,7 +105,6 @@ def lattice_constants(h_factor: float, eps_factor: float, layers: int) -> dict:
     F = np.array([-wendland_dwdr(float(ri), h) * ri / (ri * ri + eps2) for ri in r[m]])
     lap = float(np.sum(F * yy[m] ** 2))
     wall_ns = 0.0
-    wall_k = 0.0
     for layer in range(int(math.ceil(2.0 * h)) + 1):
         yi = layer + 0.5
         s_layer = 0.0
@@ -114,8 +115,6 @@ def lattice_constants(h_factor: float, eps_factor: float, layers: int) -> dict:
                 if rr >= 2.0 * h:
                     continue
                 f = -wendland_dwdr(rr, h) * rr / (rr * rr + eps2)
-                beta = min(1.5, (yi - yw) / yi)
-                s_layer += 2.0 * f * beta
-        wall_ns += yi * s_layer
-        wall_k += s_layer
-    return {"lap": lap, "wall_ns": wall_ns, "wall_k": wall_k}
+                s_layer += 2.0 * f * min(1.5, (yi - yw) / (yi + slip_length))
+        wall_ns += (yi + slip_length) * s_layer
+    return {"lap": lap, "wall_ns": wall_ns}

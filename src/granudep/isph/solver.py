@@ -15,9 +15,9 @@ numba kernels of :mod:`granudep.isph.operators`, :mod:`~granudep.isph.walls`,
    pressure already nearly balances;
 4. projection (default ``numerics.projection: adjoint_pair``, :mod:`.projection`): PPE
    ((1 − ε) D Dᵀ + ε L_c) p = −ρ/Δt D u* (+ density-invariant source) over the granular and the
-   wetted wall nodes, Dirichlet p_fs on the free surface, solved by SSOR-CG (``cg_dic``, session 12; two-level CG: ``cg_two_level``), for the velocity
+   wetted wall nodes, Dirichlet p_fs on the free surface, solved by SSOR-CG (``cg_dic``; two-level CG: ``cg_two_level``), for the velocity
    u* + Δt/ρ G pⁿ (incremental) or u*; corrector uⁿ⁺¹ = u* − Δt/ρ G (pⁿ⁺¹ − pⁿ) (or − Δt/ρ G pⁿ⁺¹),
-   G = −Dᵀ, energy-stable. ``approximate`` (before session 7): compact PPE
+   G = −Dᵀ, energy-stable. ``approximate`` (the earlier scheme): compact PPE
    Σ a_ij (p_i − p_j) = −ρ/Δt ∇·u*, mirror-pressure Neumann walls, renormalised difference gradient;
 5. positions xⁿ⁺¹ = xⁿ + Δt uⁿ⁺¹ + δr (particle shifting).
 """
@@ -168,13 +168,19 @@ class IsphSolver:
         self.p = np.maximum(self.rho * G * math.cos(th) * (c.geometry.H0 - self.y[:nf]), 0.0)
         self.eta = np.full(nf, c.rheology.eta_max if c.rheology.model == "mu_i" else c.rheology.viscosity)
         self.gdot = np.zeros(nf)
+        self.grad = None
         self.p_floor = (0.5 * self.rho * G * math.cos(th) * self.dx
                         if c.rheology.model == "mu_i" and c.rheology.pressure_floor == "half_layer" else 0.0)
         self.p_fs = 0.5 * self.rho * G * math.cos(th) * self.dx if c.numerics.free_surface_pressure == "half_layer" else 0.0
         self.fs = np.zeros(nf, dtype=bool)
         self.c0 = reference_concentration(self.h, self.dx)
         lc = lattice_constants(c.numerics.h_factor, 0.01, c.wall_layers)
-        self.lap_norm, self.wall_ns, self.wall_k = lc["lap"], lc["wall_ns"], lc["wall_k"]
+        # wall_ns: the no-slip wall stress norm (the stress-limited law's rigid bed); wall_norm: the
+        # configured law's (a Navier wall: its slip length in dx), so that its stress is exact
+        self.lap_norm, self.wall_ns = lc["lap"], lc["wall_ns"]
+        self.wall_norm = (lattice_constants(c.numerics.h_factor, 0.01, c.wall_layers,
+                                            c.wall.slip_length / c.numerics.dx)["wall_ns"]
+                          if c.wall.slip == "navier" else self.wall_ns)
         self.a_full = (reference_laplacian_sum(self.h, self.dx, self.eps2) / self.lap_norm
                        if c.numerics.kernel_completion else 0.0)
         self.slip = walls.SLIP_CODES[c.wall.slip]
@@ -216,9 +222,9 @@ class IsphSolver:
         self.m = self.rho * self.vol
         rh, m = c.rheology, c.material
         if rh.regularisation == "barker_gray_2017":
-            i_n1 = ill_posed_bounds(m.mu_s, m.mu_2, rh.mu_inf, m.I0)[0]
+            i_n1 = ill_posed_bounds(m.mu_s, m.mu_2, rh.mu_inf, m.I0_standard)[0]
             self.reg = (i_n1, rh.alpha_reg,
-                        regularisation_constant(i_n1, m.mu_s, m.mu_2, rh.mu_inf, m.I0, rh.alpha_reg))
+                        regularisation_constant(i_n1, m.mu_s, m.mu_2, rh.mu_inf, m.I0_standard, rh.alpha_reg))
         else:
             self.reg = (0.0, rh.alpha_reg, 1.0)
         self.energy = EnergyBudget(
@@ -267,6 +273,10 @@ class IsphSolver:
         dt = min(n.dt_max, self.gravity_step())
         if umax > 0:
             dt = min(dt, n.cfl * self.h / umax)
+        if not dt > 0.0:
+            i = int(np.argmax(self.u ** 2 + self.v ** 2))
+            raise IsphBlowUp(f"time step {dt:g} s (max speed {umax:g} m/s) at t={self.t:.5g} s, step {self.step_no}, "
+                             f"particle {i} at (x, y) = ({self.x[i]:.4g}, {self.y[i]:.4g}) m")
         return dt
 
     def step(self, dt: float) -> None:
@@ -352,17 +362,20 @@ class IsphSolver:
         else:
             p_seen = self.p
         self.p_rheo = np.maximum(p_seen, self.p_floor)
-        if rh.model != "mu_i":
+        if rh.model != "mu_i" and self.slip != walls.SLIP_NAVIER_OVERWRITE:
             return
         grad = operators.velocity_gradient(nb, nf, self.vol, self.x, self.y, self.u, self.v, geo.lmat, self.wall_surface,
                                            walls.gradient_slip_code(self.slip), c.wall.slip_length, self.dx)
+        self.grad = grad  # uⁿ's gradient: the authors' slip (navier_overwrite) reads it after the projection
+        if rh.model != "mu_i":
+            return
         m = c.material
         if rh.regularisation == "none" and rh.mu_inf == 0.0:
-            self.eta, self.gdot = viscous.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0,
+            self.eta, self.gdot = viscous.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0_standard,
                                                          rh.eta_min, rh.eta_max)
         else:
             self.eta, self.gdot = regularised_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2,
-                                                        rh.mu_inf, m.I0, *self.reg, rh.eta_min, rh.eta_max)
+                                                        rh.mu_inf, m.I0_standard, *self.reg, rh.eta_min, rh.eta_max)
 
     @property
     def incremental(self) -> bool:
@@ -395,7 +408,7 @@ class IsphSolver:
         indptr, indices, data, diag_v = viscous.assemble_viscous(nb, nf, self.vol, self.x, self.y,
                                                                  self.eta, self.gdot, self.wall_surface,
                                                                  walls.viscous_slip_code(self.slip), c.wall.slip_length, self.dx, dt, rho, self.eps2,
-                                                                 self.mean, self.lap_norm, self.wall_ns)
+                                                                 self.mean, self.lap_norm, self.wall_norm)
         wall_du = wall_dv = None
         if self.slip in walls.FRICTION_LAWS:
             diag_u = data[indptr[:-1]].copy()
@@ -419,7 +432,7 @@ class IsphSolver:
             # the viscous wall term's share of the diagonal (already in the matrix), for the booking
             kns = walls.viscous_wall_drag(nb, nf, self.x, self.y, self.eta, self.wall_surface, self.planes,
                                           self.slip, c.wall.slip_length, self.dx, rho, self.vol, self.eps2,
-                                          self.lap_norm, self.wall_ns)
+                                          self.lap_norm, self.wall_norm)
             scale = None
             if (c.wall.bed_stress == "bed" and c.rheology.model == "mu_i" and self.reaction_friction
                     and self.wall_an is not None and self.wall_an.shape[0] == nf):
@@ -438,7 +451,7 @@ class IsphSolver:
                 ut = np.abs(np.outer(self.u[:nf], self.planes[:, 1]) - np.outer(self.v[:nf], self.planes[:, 0]))
                 gw = rho * self.dx * (kns / eta_i) * ut
                 iw = gw * m.d / np.sqrt(np.maximum(pw, 1e-300) / m.rho_s)
-                muw = m.mu_s + (m.mu_2 - m.mu_s) * iw / (m.I0 + iw)
+                muw = m.mu_s + (m.mu_2 - m.mu_s) * iw / (m.I0_standard + iw)
                 eta_w = np.where(gw > 0.0, np.clip(muw * pw / np.maximum(gw, 1e-300), rh.eta_min, rh.eta_max), rh.eta_max)
                 scale = np.where((self.wall_an > 0.0) & (kns > 0.0), eta_w / eta_i, 1.0)
             elif c.wall.bed_stress == "hydrostatic" and c.rheology.model == "mu_i":
@@ -500,7 +513,7 @@ class IsphSolver:
                                              self.u_eps, diag_u, diag_v)
         elif self.slip == walls.SLIP_MU_W_I:
             m = c.material
-            walls.mu_w_i_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, m.mu_s, m.mu_2, m.I0, m.d,
+            walls.mu_w_i_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, m.mu_s, m.mu_2, m.I0_standard, m.d,
                                             m.rho_s, self.rho, self.dx, c.wall_shear_length, dt, self.u_eps,
                                             diag_u, diag_v)
         else:
@@ -551,8 +564,17 @@ class IsphSolver:
                  if c.numerics.shifting_surface == "band" else self.fs.astype(np.float64))
         sx, sy = shifting.shifting(nf, geo.gcx, geo.gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
                                    ncx, ncy)
-        ke_new = kinetic_energy(self.m, self.u, self.v)
         eb.projection += pressure_work(self.m, u_old, v_old, us, vs, self.u, self.v)
+        if self.slip == walls.SLIP_NAVIER_OVERWRITE and self.grad is not None:
+            # the authors' slip overwrites the first layer's new velocity: its kinetic-energy change
+            # is booked as the wall's work (dissipated when positive)
+            ke = kinetic_energy(self.m, self.u, self.v)
+            walls.navier_overwrite(nb, nf, self.grad, self.u, self.v, self.wall_surface,
+                                   walls.OVERWRITE_BAND * self.dx, c.wall.slip_length)
+            ke_new = kinetic_energy(self.m, self.u, self.v)
+            eb.wall_friction += ke - ke_new
+            eb.dissipated += ke - ke_new
+        ke_new = kinetic_energy(self.m, self.u, self.v)
         eb.shifting += -self.m * (self.gx * float(np.sum(sx)) + self.gy * float(np.sum(sy)))
         self.x[:nf] += dt * self.u + sx
         self.y[:nf] += dt * self.v + sy
@@ -601,7 +623,7 @@ class IsphSolver:
     def _project_adjoint_pair(self, nb: Pairs, lmat_p, dmat, conc, us, vs, dt, ppe_geo=None):
         """Adjoint-pair projection (:func:`projection.adjoint_pair_projection`): G = −Dᵀ, walls carry
         pressure; the pressure cannot raise the kinetic energy except through the free-surface
-        Dirichlet value and the density source (docs/paper-notes.md, session 6)."""
+        Dirichlet value and the density source (docs/paper-notes.md)."""
         c = self.cfg
         nf = self.nf
         nw = self.parts.wnx.size
@@ -683,7 +705,7 @@ class IsphSolver:
         # two-level CG (Jacobi + aggregation coarse space, iterations independent of dx)
         solver = self.cfg.numerics.pressure_solver
         if solver == "cg_dic" and self.cfg.numerics.projection == "adjoint_pair":
-            solver = "cg_ssor"     # since issue 26 (SSOR-CG on the triangles; before: cg_two_level)
+            solver = "cg_ssor"     # SSOR-CG on the triangles
         return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
                               method={"cg_dic": "dic", "cg_two_level": "two_level", "cg_ssor": "ssor"}.get(solver,
                                                                                                         "jacobi"))
@@ -693,7 +715,7 @@ class IsphSolver:
         """How the adjoint-pair PPE reaches its solver: ``csr`` (assembled), ``free`` (matrix-free,
         ``numerics.ppe_operator``) or ``triangles`` (``cg_ssor``: the SSOR sweeps' two triangles)."""
         n = self.cfg.numerics
-        if n.pressure_solver in ("cg_ssor", "cg_dic"):     # cg_dic: SSOR on the adjoint pair (issue 26)
+        if n.pressure_solver in ("cg_ssor", "cg_dic"):     # cg_dic: SSOR on the adjoint pair
             return "triangles"
         return "free" if n.ppe_operator == "matrix_free" else "csr"
 
@@ -726,7 +748,7 @@ class IsphSolver:
                              f"step {self.step_no}") from exc
 
     def _fallback(self, indptr, indices, data, rhs, kind, why):
-        """Direct solve of a system whose CG broke down or did not converge (issue 11 item 4),
+        """Direct solve of a system whose CG broke down or did not converge,
         counted in ``stats.fallbacks`` (run file attribute ``linear_solver_fallbacks``)."""
         self.stats.fallbacks += 1
         if self.stats.fallbacks <= 10:

@@ -9,11 +9,14 @@ Walls are layers of fixed particles. Each wall particle carries the plane of its
   (:mod:`granudep.isph.projection`);
 * velocity (viscous stress and strain rate): the tangential wall velocity is extrapolated
   u_w,t = (1 − β) u_i,t with Morris et al. (1997) β = min(1.5, (d_i + d_w)/(d_i + b)); b is the
-  Navier slip length (0: no slip); free slip: β = 0. No-slip/Navier wall terms are divided by the
-  lattice constant ``wall_ns`` (0.71 for h = 1.3 dx) so that a linear shear profile feels the wall
-  stress η du/dy. Coulomb (default): no viscous wall term (β = 0); the wall friction μ_B times the
-  normal load is a drag on the first particle layer (:func:`coulomb_wall_drag`,
-  :func:`coulomb_drag_from_reaction`).
+  Navier slip length (0: no slip); free slip: β = 0. The no-slip/Navier wall terms are divided by the
+  lattice sum ``wall_ns`` of the law's own linear profile u = y + b (:func:`setup.lattice_constants`:
+  0.71 for no slip with h = 1.3 dx), so that the first layer feels the Navier wall stress
+  η u_1/(d_1 + b) for any b: the slip length is in metres and converges with dx (Newtonian film,
+  :func:`verification.navier_film`). Friction laws (coulomb, mu_w_i, stress_limited): no viscous
+  wall term (β = 0); the wall traction is a drag on the first particle layer
+  (:func:`coulomb_drag_from_reaction` and the others below). ``navier_overwrite``: the authors'
+  explicit form, the first layer's velocity replaced after the projection (:func:`navier_overwrite`).
 """
 from __future__ import annotations
 
@@ -25,9 +28,12 @@ from numba import njit, prange
 from .parallel import prange_kernel
 
 
-SLIP_NO, SLIP_NAVIER, SLIP_FREE, SLIP_COULOMB, SLIP_MU_W_I, SLIP_STRESS = 0, 1, 2, 3, 4, 5
+SLIP_NO, SLIP_NAVIER, SLIP_FREE, SLIP_COULOMB, SLIP_MU_W_I, SLIP_STRESS, SLIP_NAVIER_OVERWRITE = 0, 1, 2, 3, 4, 5, 6
 SLIP_CODES = {"no_slip": SLIP_NO, "navier": SLIP_NAVIER, "free_slip": SLIP_FREE, "coulomb": SLIP_COULOMB,
-              "mu_w_i": SLIP_MU_W_I, "stress_limited": SLIP_STRESS}
+              "mu_w_i": SLIP_MU_W_I, "stress_limited": SLIP_STRESS, "navier_overwrite": SLIP_NAVIER_OVERWRITE}
+#: navier_overwrite: the band, in dx, of the nearest wall particle within which a granular particle's
+#: velocity is replaced: the authors' h/2.2 with their h = 2.6 dx, i.e. the first particle layer
+OVERWRITE_BAND = 2.6 / 2.2
 # bed laws whose wall traction is a friction drag on the first particle layer (no viscous wall term
 # in the implicit viscous matrix; :func:`coulomb_drag_from_reaction`, :func:`mu_w_i_drag_from_reaction`,
 # :func:`stress_limited_drag`)
@@ -58,12 +64,48 @@ def tangential_speed(u, v, nx, ny):
     return math.sqrt(utx * utx + uty * uty)
 
 
+@njit(cache=True)
+def navier_overwrite(pairs, nf, grad, u, v, walls, band, slip_length):
+    """The authors' slip as they wrote it (``wall.slip: navier_overwrite``; Nikooei & Manzari 2020,
+    public code ``projection.cpp``, "Partial-Slip BC"): after the projection, a granular particle
+    whose nearest wall particle lies within ``band`` gets the velocity L_s (I − n⊗n)·γ̇·n, γ̇ = ∇u + ∇uᵀ
+    its strain rate at the start of the step (explicit), n the normal of that wall particle; its
+    normal component is zero. The gradient and the viscous wall term see a wall at rest (no slip), as
+    the authors' wall particles are. Overwrites u, v in place; returns the number of particles set."""
+    start, nbr, rr = pairs.start, pairs.nbr, pairs.rr
+    wnx, wny = walls.nx, walls.ny
+    count = 0
+    for i in range(nf):
+        best = band
+        w_best = -1
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            if j >= nf and rr[k] < best:
+                best = rr[k]
+                w_best = j - nf
+        if w_best < 0:
+            continue
+        nx = wnx[w_best]
+        ny = wny[w_best]
+        ux, uy, vx, vy = grad[i, 0], grad[i, 1], grad[i, 2], grad[i, 3]
+        # (γ̇·n) with γ̇ = ∇u + ∇uᵀ, then its tangential part along t = (−n_y, n_x)
+        gx = 2.0 * ux * nx + (uy + vx) * ny
+        gy = (uy + vx) * nx + 2.0 * vy * ny
+        s = -ny * gx + nx * gy
+        u[i] = -slip_length * s * ny
+        v[i] = slip_length * s * nx
+        count += 1
+    return count
+
+
 @njit(cache=True, inline="always")
 def wall_beta_linear(xi, yi, nx, ny, c, xw, yw, slip, slip_length, dx):
     """β of the linear extrapolation u_w = u_i (b − d_w)/(d_i + b) (no cap; d_i floored at dx/4):
     u_i − u_w = β u_i for the tangential component (velocity gradient of the rheology)."""
     if slip == SLIP_FREE:
         return 0.0
+    if slip == SLIP_NAVIER_OVERWRITE:
+        return 1.0  # the authors' wall particles: at rest (u_w = 0), not extrapolated
     di = max(nx * xi + ny * yi - c, 0.25 * dx)
     dw = max(c - (nx * xw + ny * yw), 0.0)
     b = slip_length if slip == SLIP_NAVIER else 0.0

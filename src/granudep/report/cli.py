@@ -62,7 +62,7 @@ def _cmd_summary(args) -> int:
                          convergence=args.convergence, sensitivity=args.sensitivity,
                          convergence_dx=args.convergence_dx, convergence_n=args.convergence_n,
                          matrix=args.matrix, maxima=args.maxima, claims=card, diagnosis=args.diagnosis,
-                         captions=args.captions)
+                         captions=args.captions, results=args.results)
     write_text(text, args.output)
     LOG.info("summary written to %s", args.output)
     if args.html:

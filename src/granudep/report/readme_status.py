@@ -128,10 +128,36 @@ def _reference_basis(g: pd.DataFrame) -> str:
     return " Per case: " + "; ".join(f"{', '.join(c)}: {b}" for b, c in groups.items()) + "."
 
 
+def variant_lines(root: Path) -> list[str]:
+    """One line per variant chain found under ``root/variants/<name>`` (config/variants/<name>.yaml,
+    run with its own results_dir): its claims tally, Table 3 agreement and rest times, read from its
+    own outputs, so that its scorecard stands beside the reproduction's. No folder, no line."""
+    out = []
+    base = root / "variants"
+    for vdir in sorted(p for p in base.glob("*") if p.is_dir()) if base.is_dir() else []:
+        card = _csv(vdir / "claims.csv")
+        if card is None:
+            out.append(f"**Variant `{vdir.name}`** (`config/variants/{vdir.name}.yaml`): no claims.csv in "
+                       f"`{vdir.as_posix()}` (its chain has not finished).")
+            continue
+        c = card["verdict"].value_counts()
+        parts = [f"{int(c.get('reproduced', 0))} of {len(card)} claims reproduced"]
+        t3 = _csv(vdir / "regression" / "table3_comparison.csv")
+        if t3 is not None:
+            parts.append(f"Table 3 mean |difference| {t3['rel_diff_pct'].abs().mean():.1f} % (onset)")
+        rest = card.set_index("claim_id")
+        rest = rest[rest.index.str.startswith("rest_time_")]
+        if len(rest):
+            parts.append("t_s " + ", ".join(f"{r.case} {float(r.ours_paper_res):.1f}" for r in rest.itertuples()))
+        out.append(f"**Variant `{vdir.name}`** (`config/variants/{vdir.name}.yaml`, outputs in "
+                   f"`{vdir.as_posix()}`): " + "; ".join(parts) + ".")
+    return out
+
+
 def status_block(results: str | Path) -> str:
     """The generated Markdown block (markers included) for the results folder ``results``."""
     root = Path(results)
-    items = [_verification(root), *_claims(root), *_tables(root), *_comparison(root)]
+    items = [_verification(root), *_claims(root), *_tables(root), *_comparison(root), *variant_lines(root)]
     return "\n".join([BEGIN, *[f"- {line}" for line in items], END])
 
 

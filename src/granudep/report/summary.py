@@ -166,6 +166,23 @@ def section_reading_matrix(matrix, maxima) -> str:
     return "\n".join(out)
 
 
+def section_variants(results) -> str:
+    """The variant chains' scorecards (``results/variants/<name>``, config/variants/<name>.yaml) beside
+    the reproduction's; empty when no variant chain has been run."""
+    from pathlib import Path
+
+    from .readme_status import variant_lines
+    if results is None:
+        return ""
+    lines = variant_lines(Path(results))
+    if not lines:
+        return ""
+    return "\n".join(["## Variant chains", "",
+                      "The same chain with one model choice changed (`snakemake -j2 --configfile config/config.yaml "
+                      "config/variants/<name>.yaml`), read from its own outputs:", "",
+                      *[f"- {line}" for line in lines], ""])
+
+
 def section_claims(card: pd.DataFrame | None) -> str:
     """The claims scorecard (granudep.report.claims.scorecard)."""
     from .claims import tally
@@ -326,8 +343,10 @@ def section_figures(figures, out_dir: Path | None, captions=None) -> str:
 
 def build_summary(regression=None, compare=None, verification=(), benchmarks=None, figures=None,
                   output=None, convergence=None, sensitivity=None, convergence_dx=None,
-                  convergence_n=None, matrix=None, maxima=None, claims=None, diagnosis=None, captions=None) -> str:
-    """The Markdown summary text (see module docstring)."""
+                  convergence_n=None, matrix=None, maxima=None, claims=None, diagnosis=None, captions=None,
+                  results=None) -> str:
+    """The Markdown summary text (see module docstring); ``results``: the results folder, whose
+    ``variants/`` chains are shown beside the claims scorecard."""
     out_dir = Path(output).parent if output is not None else None
     parts = [
         "# granudep: reproduction summary (Nikooei & Choi 2022)\n",
@@ -339,6 +358,7 @@ def build_summary(regression=None, compare=None, verification=(), benchmarks=Non
         f"{100 * PAPER_MAX_ERRORS['deposition']['runout']:.0f} % / {100 * PAPER_MAX_ERRORS['deposition']['flow_time']:.0f} %, "
         "against Farin et al. (2014) measurements, which are not available to us.\n",
         section_claims(claims),
+        section_variants(results),
         section_table3(regression),
         section_table5(regression),
         section_regression_diagnosis(diagnosis),
