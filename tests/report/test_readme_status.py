@@ -84,3 +84,26 @@ def test_project_readme_has_one_block():
     from pathlib import Path
     text = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
     assert text.count(BEGIN) == 1 and text.count(END) == 1
+
+
+def test_table3_is_also_given_per_slope_angle(results):
+    pd.DataFrame({"case": ["T10-A35", "T22-A70", "T22-A70"], "rel_diff_pct": [4.0, 10.0, -30.0],
+                  "rel_diff_fit_pct": [1.0, 5.0, 15.0]}).to_csv(results / "regression/table3_comparison.csv", index=False)
+    assert "onset per slope: 10°: 4.0 %, 22°: 20.0 %." in status_block(results)
+
+
+def test_a_variant_chain_gets_its_own_line(results):
+    assert "Variant" not in status_block(results)  # no variants folder, no line
+    v = results / "variants" / "no-slip"
+    (v / "regression").mkdir(parents=True)
+    pd.DataFrame({"claim_id": ["rest_time_T22-A70", "x"], "case": ["T22-A70"] * 2, "paper_value": [13.5, 1.0],
+                  "ours_paper_res": [18.22, 2.0], "verdict": ["not reproduced", "reproduced"]}
+                 ).to_csv(v / "claims.csv", index=False)
+    pd.DataFrame({"case": ["T16-A50", "T22-A70"], "rel_diff_pct": [-40.0, -50.0]}
+                 ).to_csv(v / "regression/table3_comparison.csv", index=False)
+    (results / "variants" / "unfinished").mkdir()
+    block = status_block(results)
+    line = [ln for ln in block.splitlines() if "Variant `no-slip`" in ln][0]
+    assert "1 of 2 claims reproduced" in line and "45.0 % (onset; 16°: 40.0 %, 22°: 50.0 %)" in line
+    assert "t_s T22-A70 18.2" in line and "config/variants/no-slip.yaml" in line
+    assert "Variant `unfinished`" in block and "has not finished" in block

@@ -83,7 +83,7 @@ def _tables(root: Path) -> list[str]:
         m = t3["rel_diff_pct"].abs().mean()
         mf = t3["rel_diff_fit_pct"].abs().mean() if "rel_diff_fit_pct" in t3 else math.nan
         out.append(f"**Table 3** critical times: mean |difference| {m:.1f} % (onset) and {mf:.1f} % (fit "
-                   f"intercept) over {len(t3)} (case, [x]) pairs.")
+                   f"intercept) over {len(t3)} (case, [x]) pairs; onset per slope: {table3_by_angle(t3)}.")
     t5 = _csv(root / "regression" / "table5_comparison.csv")
     if t5 is None:
         out.append(f"**Table 5** A and B: {_missing('regression/table5_comparison.csv')}.")
@@ -128,6 +128,17 @@ def _reference_basis(g: pd.DataFrame) -> str:
     return " Per case: " + "; ".join(f"{', '.join(c)}: {b}" for b, c in groups.items()) + "."
 
 
+def table3_by_angle(t3: pd.DataFrame, column: str = "rel_diff_pct") -> str:
+    """Mean |relative difference| of Table 3 per slope angle (from the case names T{θ}-A{a}):
+    '10°: 5.1 %, 16°: ...'."""
+    if "case" not in t3 or column not in t3:
+        return "not available (no case column)"
+    theta = t3["case"].astype(str).str.extract(r"^T(\d+)-")[0]
+    parts = [f"{th}°: {t3.loc[theta == th, column].abs().mean():.1f} %"
+             for th in sorted(theta.dropna().unique(), key=int)]
+    return ", ".join(parts)
+
+
 def variant_lines(root: Path) -> list[str]:
     """One line per variant chain found under ``root/variants/<name>`` (config/variants/<name>.yaml,
     run with its own results_dir): its claims tally, Table 3 agreement and rest times, read from its
@@ -144,7 +155,8 @@ def variant_lines(root: Path) -> list[str]:
         parts = [f"{int(c.get('reproduced', 0))} of {len(card)} claims reproduced"]
         t3 = _csv(vdir / "regression" / "table3_comparison.csv")
         if t3 is not None:
-            parts.append(f"Table 3 mean |difference| {t3['rel_diff_pct'].abs().mean():.1f} % (onset)")
+            parts.append(f"Table 3 mean |difference| {t3['rel_diff_pct'].abs().mean():.1f} % (onset; "
+                         f"{table3_by_angle(t3)})")
         rest = card.set_index("claim_id")
         rest = rest[rest.index.str.startswith("rest_time_")]
         if len(rest):

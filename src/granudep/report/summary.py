@@ -39,6 +39,13 @@ def section_table3(regression) -> str:
     out.append(f"\nMean |relative difference|: onset {pct_mean(df.get('rel_diff_pct', pd.Series(dtype=float)))}, "
                f"fit intercept {pct_mean(df.get('rel_diff_fit_pct', pd.Series(dtype=float)))} "
                f"over {len(df)} (case, [x]) pairs.\n")
+    if {"case", "rel_diff_pct"} <= set(df.columns):
+        from .readme_status import table3_by_angle
+        signed = df["case"].astype(str).str.extract(r"^T(\d+)-")[0]
+        mean_signed = ", ".join(f"{th}°: {df.loc[signed == th, 'rel_diff_pct'].mean():+.1f} %"
+                                for th in sorted(signed.dropna().unique(), key=int))
+        out.append(f"Per slope angle, onset: mean |difference| {table3_by_angle(df)}; mean signed difference "
+                   f"{mean_signed} (positive: ours later than the paper).\n")
     return "\n".join(out)
 
 
