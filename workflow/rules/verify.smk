@@ -26,8 +26,8 @@ rule verify_da:
 # The ISPH suite in three parts that -j2 runs side by side (the Bagnold layers take most of the
 # time), merged in table order.
 VERIFY_ISPH_PARTS = {
-    "steady": "hydrostatic,film_flow,sliding_block,decelerating_layer",
-    "bagnold": "bagnold",
+    "steady": "hydrostatic,film_flow,navier_film,sliding_block,decelerating_layer",
+    "bagnold": "bagnold,navier_bagnold",
     "transient": "dam_break,dam_break_approximate,collapse_t22a70",
 }
 
