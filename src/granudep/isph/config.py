@@ -231,15 +231,15 @@ class Numerics:
                                      "dx-independent iterations), or CG "
                                      "preconditioned by an algebraic-multigrid V-cycle (pyamg, optional package: "
                                      "smoothed aggregation or Ruge-Stuben; N-independent iterations but slower "
-                                     "at 3.7k-60k particles, see docs/paper-notes.md); cg_ssor: CG with the "
+                                     "at 3.7k-60k particles, see docs/performance.md); cg_ssor: CG with the "
                                      "symmetric Gauss-Seidel (SSOR, omega = 1) preconditioner in Eisenstat form, "
                                      "which never breaks down (adjoint-pair PPE at 4 mm: 47 -> 29 iterations; "
-                                     "docs/speed.md)")
+                                     "docs/performance.md)")
     deflation_min_unknowns: int = param(12_000, ge=0, unit="unknowns",
                                         doc="adjoint_pair PPE with cg_dic / cg_ssor: from this many unknowns "
                                             "on, the SSOR-CG is deflated by an aggregation coarse space "
                                             "(A-DEF2, isph/deflation.py: 17-27 iterations at every dx instead "
-                                            "of 29-72). Measured through T22-A70 runs (docs/speed.md): at "
+                                            "of 29-72). Measured through T22-A70 runs (docs/performance.md): at "
                                             "7k unknowns (2 mm) 0-30 % slower, at 14.5k (1.4 mm) 0-28 % "
                                             "faster, at 28k (1 mm) ~2x faster, so the 4 mm runs and the "
                                             "7000-particle 2 mm columns keep the plain SSOR-CG; same "
@@ -249,7 +249,7 @@ class Numerics:
                               doc="adjoint_pair PPE with the two-level CG (pressure_solver "
                                   "cg_two_level): the matrix assembled as the product (1 - eps) D D^T + eps L_c "
                                   "(CSR), or applied unassembled as D (D^T x) + eps L_c x (the same operator; "
-                                  "no product to form, each iteration dearer; docs/speed.md)")
+                                  "no product to form, each iteration dearer; docs/performance.md)")
     viscous_solver: str = param("cg_dic", choices=("direct", "cg", "cg_dic"),
                                 doc="implicit viscous step: SuperLU, Jacobi-preconditioned CG (u and v in lock-step) "
                                     "or DIC-preconditioned CG, warm-started from the right-hand side")

@@ -623,7 +623,7 @@ class IsphSolver:
     def _project_adjoint_pair(self, nb: Pairs, lmat_p, dmat, conc, us, vs, dt, ppe_geo=None):
         """Adjoint-pair projection (:func:`projection.adjoint_pair_projection`): G = −Dᵀ, walls carry
         pressure; the pressure cannot raise the kinetic energy except through the free-surface
-        Dirichlet value and the density source (docs/paper-notes.md)."""
+        Dirichlet value and the density source (docs/model.md)."""
         c = self.cfg
         nf = self.nf
         nw = self.parts.wnx.size

@@ -189,7 +189,7 @@ def contact_length(pairs, nf, x, y, contact, planes, dx):
     """Wall length carried by each contact particle (Voronoi cell along the wall): half the distance
     to the nearest contact particle of the same wall on either side (dx/2 on a side without one
     within the neighbour list), clipped to [dx/2, 2 dx] in total. On the initial lattice this is dx;
-    in a flow the first layer stretches along the bed (docs/paper-notes.md, "Kernel design notes")."""
+    in a flow the first layer stretches along the bed (docs/model.md, "Kernel design notes")."""
     start, nbr = pairs.start, pairs.nbr
     npl = planes.shape[0]
     length = np.zeros((nf, npl))
