@@ -1,4 +1,4 @@
-"""The product speaks of itself alone: no word of how it was built ("session 12", "issue 25", an
+"""The product speaks of itself alone: no word of how it was built (a session or issue number, an
 engineer's letter, a coordination file) in the code, tests, configs, workflow, docs or README. Such a
 sentence means nothing to a user and turns false at the next change; the history belongs in
 CHANGELOG.md, which is the one file excepted."""
@@ -48,8 +48,9 @@ def test_no_word_of_how_the_product_was_built():
     assert not found, f"{len(found)} line(s) name sessions, issues or engineers:\n" + "\n".join(found)
 
 
-@pytest.mark.parametrize("planted", ["# since Session 12 the default", "see issue 25, item 1", "engineer C's stage",
-                                     "as common.md says"])
+# the planted words are assembled at run time so that this file does not match its own pattern
+@pytest.mark.parametrize("planted", ["# since Sess" + "ion 12 the default", "see iss" + "ue 25, item 1",
+                                     "engin" + "eer C's stage", "as comm" + "on.md says"])
 def test_a_planted_word_is_caught(tmp_path, planted):
     for tree in ("src/pkg", "docs", "tests"):
         (tmp_path / tree).mkdir(parents=True)
@@ -63,6 +64,6 @@ def test_a_planted_word_is_caught(tmp_path, planted):
 
 
 def test_the_words_are_matched_as_the_brief_gives_them():
-    assert WORDS.search("Issue 7") and WORDS.search("SESSION 3") and WORDS.search("engineer B")
+    assert WORDS.search("Iss" + "ue 7") and WORDS.search("SESS" + "ION 3") and WORDS.search("engin" + "eer B")
     assert not WORDS.search("engineers at scale") and not WORDS.search("an issue of scale")
     assert not WORDS.search("sessions of the workflow") and not WORDS.search("engineer-scale runs")

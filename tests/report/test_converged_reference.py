@@ -1,4 +1,4 @@
-"""The converged 2D reference (issue 27): the finest ladder rung within the tolerance of the next coarser
+"""The converged 2D reference: the finest ladder rung within the tolerance of the next coarser
 one, else the workflow's run, every row labelled with its dx and why; the A, B readings' plain labels."""
 import math
 

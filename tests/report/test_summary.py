@@ -51,7 +51,7 @@ def test_summary_numbers_from_files(inputs):
     assert "| isph/T22-A70 | 123.4 | 457 |" in text
     assert "[fig5_free_surface.png](figures/fig5_free_surface.png)" in text
     # only the two studies beyond the paper (separate targets) were not given
-    assert text.count("Not available") == 5  # + claims scorecard, regression diagnosis, reading matrix (issue 13) not given
+    assert text.count("Not available") == 5  # + claims scorecard, regression diagnosis, reading matrix not given
     assert "convergence runs (`snakemake -j2 convergence`)" in text and "sensitivity table" in text
 
 
@@ -80,7 +80,7 @@ def _figure_lines(text):
 
 
 def test_summary_lists_every_figure_given_with_its_caption(tmp_path):
-    """Issue 27: the workflow passes every figure as NAME=PATH and the report's captions; each is listed
+    """The workflow passes every figure as NAME=PATH and the report's captions; each is listed
     with a non-empty caption (before, the summary rule gave no figures and the section said 'not given')."""
     names = sorted(p.stem for p in CAPTIONS.glob("*.rst"))
     assert len(names) >= 17

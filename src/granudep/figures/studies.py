@@ -36,7 +36,7 @@ FRONT_MIN_LAYERS = 2.0
 
 
 def _front_row(ds) -> dict:
-    """ΔL/L0 of the robust front measures of a 2D run (issue 11) and its time to rest t_s/t_c; an
+    """ΔL/L0 of the robust front measures of a 2D run and its time to rest t_s/t_c; an
     attached front whose thickness threshold spans fewer than FRONT_MIN_LAYERS particle layers
     (threshold < 2 dx: a sheet one particle thick reads as that thickness) is not resolved: NaN."""
     L0, dx, d = float(ds.attrs["L0"]), float(ds.attrs["dx"]), float(ds.attrs["d"])

@@ -76,7 +76,7 @@ def moving_share(u: np.ndarray, v: np.ndarray, speed: float = CRITICAL_SPEED) ->
 
 def time_to_rest_mass_share(time: np.ndarray, u: np.ndarray, v: np.ndarray, share: float = 0.99,
                             speed: float = CRITICAL_SPEED, duration: float = 0.1) -> float:
-    """The robust rest rule (issue 25): the start of the first window of ``duration`` in which at
+    """The robust rest rule: the start of the first window of ``duration`` in which at
     least ``share`` of the mass moves slower than ``speed`` (at most 1 − share moves faster), after
     the flow has started (more than 1 − share of the mass once moved at ``speed``). NaN when the
     record never rests that long. Beside the every-particle rule of the run (``time_to_rest``: the

@@ -118,7 +118,7 @@ def section_compare(compare) -> str:
 
 
 def section_reading_matrix(matrix, maxima) -> str:
-    """Reading matrix (issue 13): {A, B readings} × {deposition, none} against every reference."""
+    """Reading matrix: {A, B readings} × {deposition, none} against every reference."""
     out = ["## Reading matrix: which A, B reading, which reference (Figs 15–16)\n"]
     mt, mx = read_csv(matrix), read_csv(maxima)
     if mt is None or mx is None:
