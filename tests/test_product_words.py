@@ -12,7 +12,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 TREES = ("src", "tests", "config", "workflow", "docs", "README.md")
 EXCEPTED = {"CHANGELOG.md"}
-WORDS = re.compile(r"session [0-9]|issue [0-9]|engineer [A-Z]\b|common\.md", re.IGNORECASE)
+WORDS = re.compile(r"sessions? [0-9]|issues? [0-9]|engineer [A-Z]\b|common\.md|\bthe lead\b", re.IGNORECASE)
 SKIP_DIRS = {"__pycache__", ".pytest_cache", ".ipynb_checkpoints"}
 
 
@@ -67,3 +67,5 @@ def test_the_words_are_matched_as_the_brief_gives_them():
     assert WORDS.search("Iss" + "ue 7") and WORDS.search("SESS" + "ION 3") and WORDS.search("engin" + "eer B")
     assert not WORDS.search("engineers at scale") and not WORDS.search("an issue of scale")
     assert not WORDS.search("sessions of the workflow") and not WORDS.search("engineer-scale runs")
+    assert WORDS.search("sess" + "ions 1-6") and WORDS.search("the le" + "ad's ladder")
+    assert not WORDS.search("the leading edge") and not WORDS.search("lead time")

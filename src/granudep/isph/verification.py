@@ -352,7 +352,7 @@ def martin_moyce_comparison(t, front_tail, front_v99, a: float) -> dict:
 
 
 def dam_break_approximate(quick: bool = False) -> list[dict]:
-    """The dam break with the scheme of sessions 1–6 (``numerics.projection: approximate`` with the
+    """The dam break with the earlier approximate scheme (``numerics.projection: approximate`` with the
     per-step density source, ``numerics.density_relaxation_form: per_step``), reported (no tolerance on the energy; its stability row still counts):
     its pressure creates energy (+62 % of E_ref by t = 1 s at 4 mm; 2 mm blows up), which is why it
     is no longer the default (docs/paper-notes.md). 8 mm (quick) or 4 mm."""
