@@ -163,7 +163,7 @@ def test_singular_direct_solve_is_a_blow_up_not_a_crash():
 def test_amg_pressure_solver_runs_and_agrees_with_cg_dic():
     """numerics.pressure_solver amg_sa / amg_rs (pyamg): a short collapse without fallbacks, pressure
     within the round-off spread of the default at t = 0.02 s (the trajectories differ at solver
-    tolerance, see docs/paper-notes.md "Linear solvers")."""
+    tolerance, see docs/model.md "Linear solvers")."""
     pytest.importorskip("pyamg")
     ref = run_isph("T22-A70", dx=0.01, t_end=0.02)
     for m in ("amg_sa", "amg_rs"):

@@ -139,7 +139,7 @@ def convergence(isph=(), critical=(), da=(), x_norms=(0.2, 0.4, 0.6, 0.8)):
     hide_unused(axes, len(panels))
     note(fig, "Finer resolution to the right. 2D fronts (a): the 1 % volume front and the attached fronts at 5 mm and "
               "2 d, each drawn only where its thickness spans >= 2 particle layers; t_s: max speed < 0.1 m/s. "
-              "DA fronts: depth >= the file's front_depth_threshold (docs/paper-notes.md, Shared definitions).")
+              "DA fronts: depth >= the file's front_depth_threshold (docs/model.md, Shared definitions).")
     return fig
 
 

@@ -8,7 +8,7 @@ the initial column: it separates the particles that the collapse mobilises from 
 the static block behind it. So it is measured on the particles' *initial* positions (x0, y0), not
 on where they are at the time of measurement (the moving wedge has already slumped and sheared by
 then), and reported from the horizontal (angle from the bed + θ). Decision and numbers:
-docs/paper-notes.md, "Failure plane".
+docs/model.md, "Failure plane".
 """
 from __future__ import annotations
 

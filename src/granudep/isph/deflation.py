@@ -40,7 +40,7 @@ against 17-27), 0-28 % faster at 14.5k (1.4 mm: 35-69 against 17-27) and about t
 (1 mm: 64-72 against 18-19); ``numerics.deflation_min_unknowns`` (12 000) picks it from there on.
 
 Results: the same operator and stopping test as the SSOR-CG, so the solutions agree within the
-solver tolerance (not bit for bit); the runout check is in docs/speed.md.
+solver tolerance (not bit for bit); the runout check is in docs/performance.md.
 """
 from __future__ import annotations
 

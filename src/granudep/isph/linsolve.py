@@ -9,7 +9,7 @@ x += α p, r −= α q. The dot products go through ``np.dot`` (BLAS ddot, the s
 ``dot`` and ``linalg.norm`` use; bitwise equality checked in tests/isph/test_linsolve.py); the CSR
 product sums each row in storage order from 0, as scipy's ``csr_matvec`` does. Why bit-for-bit:
 the collapse amplifies differences at the solver tolerance (T22-A70 at dx = 1 cm: the kinetic
-energy at t = 1 s moves by 26 % between solver_rtol 1e-8 and 1e-10, see docs/paper-notes.md),
+energy at t = 1 s moves by 26 % between solver_rtol 1e-8 and 1e-10, see docs/model.md),
 so a solver that only agrees "to within the tolerance" would not reproduce the existing runs.
 
 :func:`pcg_jacobi_pair` solves the two implicit viscous systems (u and v) in lock-step: the

@@ -18,7 +18,7 @@ D u_k = tr A + u_k·(L_k + L̄_j) Σ_j V ∇_k W_kj + …: on a support cut by a
 velocity normal to the wall, but on a disordered cloud Σ_j V ∇_k W_kj ≠ 0 and a uniform translation
 reads as divergence of order |u| × disorder / h (tests/isph/test_projection.py). That zero-order
 inconsistency is why this option damps the water dam break (−58 % of E_ref by t = 0.4 s at dx = 4 mm
-instead of +20 %) and is not the default (docs/paper-notes.md, "Energy budget").
+instead of +20 %) and is not the default (docs/model.md, "Energy-stable projection").
 """
 from __future__ import annotations
 

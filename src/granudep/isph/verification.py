@@ -116,14 +116,14 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     only): 2.5 % / 4.6 %, the error growing with refinement: the truncated support one layer under
     the surface pushed that layer up into the surface layer at every step, the top layer sat 0.25 dx
     low and the pressure of the whole layer ≈ 1.1 Pa (0.15 dx of overburden) low, which raised
-    μ(I) = τ/p and the shear rate (+4–12 %). See docs/paper-notes.md.
+    μ(I) = τ/p and the shear rate (+4–12 %). See docs/model.md.
     Also reported (no tolerance): the same layer at the collapse resolutions dx = 4 and 2 mm, 5 and 10
     particles over the depth, over t = 10..20 s (they never settle). Measured (shifting band, at 4.5..5 s): L2 30 % and 8 % (mean u / analytic 0.70 and 0.92;
     sampling every step instead of every 0.05 s gave 22 % and 13 %: at 5–10 particles the layer is
     not steady), the shear rate 15–30 % low across the depth at 4 mm, with the pressure 1–8 % above
     hydrostatic (through the flat μ(I) that accounts for much of it): thin μ(I) flows are too stiff at
     coarse dx, which is why the T22-A70 runout grows under refinement
-    (docs/paper-notes.md, "Runout vs resolution")."""
+    (CHANGELOG.md, the 2026-11-22 measurements)."""
     rows = []
     for dx in ((0.001,) if quick else (0.001, 0.0005)):
         rows.append(_bagnold_row(dx, theta_deg, t_end=BAGNOLD_T_END, t_avg=BAGNOLD_T_AVG))
@@ -212,7 +212,7 @@ def decelerating_layer(quick: bool = False) -> list[dict]:
     Bagnold check's 3 %) with 10 particles across the layer (h = 20 mm at 2 mm; full suite also h =
     10 mm at 1 mm). Measured: 0.027 and 0.022 m/s. Reported (no tolerance, full suite):
     sheets 2 and 3 particles thick, the regime of the T22 fronts, where every first-layer treatment
-    errs by 0.08–0.38 m/s (``benchmarks/decelerating_layer.py``, docs/paper-notes.md)."""
+    errs by 0.08–0.38 m/s (``benchmarks/decelerating_layer.py``, docs/model.md)."""
     rows = [_decelerating_row(0.02, 0.002, 0.03)]
     if not quick:
         rows.append(_decelerating_row(0.01, 0.001, 0.03))
@@ -355,7 +355,7 @@ def dam_break_approximate(quick: bool = False) -> list[dict]:
     """The dam break with the earlier approximate scheme (``numerics.projection: approximate`` with the
     per-step density source, ``numerics.density_relaxation_form: per_step``), reported (no tolerance on the energy; its stability row still counts):
     its pressure creates energy (+62 % of E_ref by t = 1 s at 4 mm; 2 mm blows up), which is why it
-    is no longer the default (docs/paper-notes.md). 8 mm (quick) or 4 mm."""
+    is no longer the default (docs/model.md). 8 mm (quick) or 4 mm."""
     return dam_break(quick, projection="approximate", resolutions=(0.008,) if quick else (0.004,),
                      tolerance=math.inf, numerics={"density_relaxation_form": "per_step"})
 

@@ -11,7 +11,7 @@ ours on the converged (or finest available) reference where that has been run, a
 
 Every "ours" number is read from an output file (named in column ``our_source``); nothing is
 typed in. The tolerances are in ``data/paper_claims.csv`` and were fixed before reading our numbers
-(docs/paper-notes.md, "Claims scorecard").
+(docs/model.md, "Claims scorecard").
 """
 from __future__ import annotations
 

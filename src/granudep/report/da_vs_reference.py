@@ -52,7 +52,7 @@ MAIN_MEASURES = ("2d", "v99")
 REFERENCE_COLUMNS = ("case", "a", "theta_deg", "final_runout_norm", "flow_time", "flow_time_norm",
                      "front_definition", "provenance", "note", "dx", "time_to_rest",
                      *[f"final_runout_norm_{m}" for m in MEASURES], "flow_time_v99", "path", "reference_basis")
-#: default flow-time tolerance (m), the shared definition's default (docs/paper-notes.md)
+#: default flow-time tolerance (m), the shared definition's default (docs/model.md)
 FLOW_TIME_TOL = 1e-3
 
 
