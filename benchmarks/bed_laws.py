@@ -7,7 +7,7 @@ critical times against the paper and the energy dissipated at the wall and in th
         [--figure docs/figures/bed_laws.png]
     python benchmarks/bed_laws.py --from-csv docs/data/bed_laws.csv --figure docs/figures/bed_laws.png
 
-Bed laws (``LAWS``; docs/paper-notes.md, "Bed laws"): no_slip (u_w = 0, the μ(I) wall stress at the
+Bed laws (``LAWS``; docs/model.md, "Bed laws"): no_slip (u_w = 0, the μ(I) wall stress at the
 bed's normal stress), coulomb (tan φ_B = tan 25.5° times the walls' reaction), stress_limited (no
 slip while the wall stress stays below tan φ_B p_w: our reading of the paper's stress-based slip),
 mu_w_i (the bulk μ(I) law at the wall, the slip sheared over one grain d), navier (slip length

@@ -19,7 +19,7 @@ Solver alone on one captured step (PPE 3603 unknowns, 74k nonzeros; viscous 3750
 Neighbour list 1.43 -> 0.76 ms. T22-A70 dx = 4 mm to rest (fewer particles: scipy's per-call and
 per-iteration Python overhead weighs more): before 23.9 s (repeats 27.5, 31.1; 2499 steps), cg 14.2 s
 (repeats 14.3, 14.9; same 2499 steps, same front and rest time), cg_dic 12.0 s (2448 steps; a
-different trajectory, see docs/paper-notes.md "Linear solvers").
+different trajectory, see docs/model.md "Linear solvers").
 
 Performance pass (session 3), measured the same way (interleaved with the previous code, minimum of
 3, --steps 400, load average 0.8-0.9): cg_dic 11.80 [1.07, 1.70, 3.52, 5.38] -> 6.78 ms/step

@@ -15,7 +15,7 @@ any N (numerics.deflation_min_unknowns 0 / never; the default deflates from 12 0
 
 Run (one command per figure set):
   NUMBA_NUM_THREADS=1 python benchmarks/bench_isph_scaling.py [--dx 4,2,1] [--steps 50] [--solvers cg_two_level,cg_dic]
-  python benchmarks/bench_isph_scaling.py --threads 1,2 --solvers cg_two_level,cg_dic   (issue 26's figures, docs/speed.md)
+  python benchmarks/bench_isph_scaling.py --threads 1,2 --solvers cg_two_level,cg_dic   (the figures of docs/performance.md)
       [--set numerics.projection=approximate]   (scheme options of the timed steps; default: adjoint pair)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py ...
   python benchmarks/bench_isph_scaling.py --threads 1,2      (one subprocess per thread count, interleaved;

@@ -143,7 +143,7 @@ def main() -> None:
                     rows.setdefault((case, solver), []).append(g)
     if os.environ.get("NUMBA_NUM_THREADS") != "1":
         print("warning: NUMBA_NUM_THREADS is not 1, so granudep does not run on one thread like PySPH (OMP_NUM_THREADS=1); "
-              "on the 2-core machine two numba threads are slower (docs/speed.md, session 15)", flush=True)
+              "on the 2-core machine two numba threads are slower (docs/performance.md)", flush=True)
     print(f"NUMBA_NUM_THREADS={os.environ.get('NUMBA_NUM_THREADS', '(unset)')}, OMP_NUM_THREADS=1 for PySPH; "
           f"median of {args.repeats} interleaved rounds (all values in brackets)")
     med = {k: statistics.median(r["ms"] for r in v) for k, v in rows.items()}

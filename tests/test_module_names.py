@@ -1,4 +1,4 @@
-"""Module names say what they make (issue 15); the old `compare` names keep working; the report
+"""Module names say what they make; the old `compare` names keep working; the report
 stage is one package with its own CLI and no upward import."""
 from __future__ import annotations
 

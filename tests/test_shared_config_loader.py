@@ -1,4 +1,4 @@
-"""One config loader and one override rule for every stage; one name per quantity (issue 15).
+"""One config loader and one override rule for every stage; one name per quantity.
 
 ``config_loader_expected.json`` holds the resolved configs that the two loaders of before
 (``isph.config.load_config`` with dotted keys, ``da.config.resolve`` with section dicts) gave for

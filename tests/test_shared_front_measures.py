@@ -1,4 +1,4 @@
-"""Robust front measures (issue 11): the same rules for 2D and DA depth profiles."""
+"""Robust front measures: the same rules for 2D and DA depth profiles."""
 import numpy as np
 
 from granudep.front import front_measures, tail_extent, volume_front

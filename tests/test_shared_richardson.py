@@ -15,7 +15,7 @@ def test_recovers_the_order_and_limit_of_a_power_law(p):
 
 
 def test_slow_drift_is_flagged_unreliable():
-    # the T22-A70 ladder of session 5: 6.78, 8.08, 9.68 at 4, 3, 2 mm: order ~0.35
+    # an early T22-A70 ladder (Coulomb bed, approximate projection): 6.78, 8.08, 9.68 at 4, 3, 2 mm: order ~0.35
     r = observed_order([0.004, 0.003, 0.002], [6.78, 8.08, 9.68])
     assert 0.2 < r["order"] < 0.5 and "unreliable" in r["reason"]
 

@@ -223,11 +223,11 @@ def main() -> None:
         profs.append(pr)
     a.out.mkdir(parents=True, exist_ok=True)
     head = ("# Basilisk + granular.h (P.-Y. Lagree) runs of granudep's cases with a no-slip bed and back wall "
-            f"(issue 25 item 1); written {date} by benchmarks/independent/measures.py; lengths m, times s\n")
+            f"(independent check of the bed); written {date} by benchmarks/independent/measures.py; lengths m, times s\n")
     lay = layer_runs(a.runs)
     if not lay.empty:
         with open(a.out / "decelerating_layer_basilisk.csv", "w") as fh:
-            fh.write(head.replace("runs of granudep's cases with a no-slip bed and back wall (issue 25 item 1)",
+            fh.write(head.replace("runs of granudep's cases with a no-slip bed and back wall (independent check of the bed)",
                                   "decelerating layers (layer.c; benchmarks/decelerating_layer.py)"))
             lay.to_csv(fh, index=False, float_format="%.6g")
         print(f"decelerating layers: {lay.run.nunique()} runs -> {a.out / 'decelerating_layer_basilisk.csv'}")

@@ -1,4 +1,4 @@
-"""The checkpoint file shared by the DA and ISPH stages (issue 14: long runs survive interruption).
+"""The checkpoint file shared by the DA and ISPH stages (long runs survive interruption).
 
 :class:`CheckpointFile` is one pickle file holding a run's state, written atomically (temporary
 file + rename, :func:`granudep.io.atomic_path`) at most every ``every_s`` wall seconds and when

@@ -1,4 +1,4 @@
-"""Options every run command shares: ``--set KEY=VALUE``, ``--threads N`` (issue 14, users' habits)."""
+"""Options every run command shares: ``--set KEY=VALUE``, ``--threads N``."""
 from __future__ import annotations
 
 import os

@@ -71,7 +71,7 @@ def param(default: Any = dataclasses.MISSING, *, ge=None, gt=None, le=None, lt=N
           default_factory=dataclasses.MISSING):
     """A dataclass field with validation metadata (range, choices, unit, doc).
 
-    ``was``: the key's old name (one name per quantity across stages, issue 15); a config that
+    ``was``: the key's old name (one name per quantity across stages); a config that
     still gives it is refused with one line naming the new key (:func:`build`, :func:`overrides_mapping`).
     """
     meta = {"ge": ge, "gt": gt, "le": le, "lt": lt, "choices": choices, "unit": unit, "doc": doc, "was": was}
@@ -259,7 +259,7 @@ def merge(base: Mapping[str, Any], override: Mapping[str, Any]) -> dict:
     return out
 
 
-# --- one loader and one override rule for every stage (issue 15) -----------------------------------
+# --- one loader and one override rule for every stage -----------------------------------
 
 def renamed(cls: type) -> dict[str, str]:
     """Old key -> new key of ``cls``'s fields (``param(was=...)``)."""

@@ -48,7 +48,7 @@ def flow_time(time: np.ndarray, front: np.ndarray, tol: float) -> float:
 
 
 # ---------------------------------------------------------------------------------------------
-# Robust front measures (issue 11): the same four numbers for 2D and DA depth profiles
+# Robust front measures: the same four numbers for 2D and DA depth profiles
 # ---------------------------------------------------------------------------------------------
 #: thickness of the second attached front, m (independent of the grain size and of dx)
 FRONT_FIXED_THICKNESS = 0.005
@@ -88,7 +88,7 @@ def tail_extent(x_edges: np.ndarray, depth: np.ndarray) -> float:
 
 def front_measures(x_edges: np.ndarray, depth: np.ndarray, d: float,
                    fixed: float = FRONT_FIXED_THICKNESS, share: float = FRONT_VOLUME_SHARE) -> dict:
-    """The robust front measures of one depth profile (issue 11), by name:
+    """The robust front measures of one depth profile, by name:
 
     - ``front_2d``: attached front at a thickness of 2 grain diameters (the default front);
     - ``front_5mm``: attached front at a fixed thickness ``fixed`` (5 mm);

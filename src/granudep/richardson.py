@@ -1,4 +1,4 @@
-"""Observed order of convergence and Richardson extrapolation from three resolutions (issue 11).
+"""Observed order of convergence and Richardson extrapolation from three resolutions.
 
 For spacings h1 < h2 < h3 (finest first) and results f1, f2, f3, with e21 = f2 − f1 and
 e32 = f3 − f2, the observed order p of f = f* + C h^p solves (h3^p − h2^p)/(h2^p − h1^p) = e32/e21

@@ -2,7 +2,7 @@
 
 * :func:`deferred_signals` — around a file write (``io.atomic_path``): SIGINT/SIGTERM are held
   until the write and the rename are done, then delivered. A KeyboardInterrupt raised inside
-  netCDF4/HDF5 while xarray holds its file lock hung the process (issue 14 item 6); now the
+  netCDF4/HDF5 while xarray holds its file lock hung the process; now the
   write completes (or fails on its own) and the signal acts after it.
 * :func:`graceful_stop` — around a run (the ``granudep isph``/``da`` commands): the first
   SIGTERM/SIGINT sets :data:`STOP`; the run's progress hook sees it at the next output time and

@@ -1,4 +1,4 @@
-"""One validation for the command line and the workflow (issue 14 item 4).
+"""One validation for the command line and the workflow.
 
 The Snakefile calls :func:`check_structure` on the merged config before it reads anything from it,
 then, once every rule is defined, :func:`check_jobs` with one :class:`Job` per stage run it would

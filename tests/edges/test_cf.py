@@ -1,4 +1,4 @@
-"""Issue 14 item 9: one file of each stage is CF-1.10 clean (IOOS compliance-checker when installed)."""
+"""One file of each stage is CF-1.10 clean (IOOS compliance-checker when installed)."""
 from __future__ import annotations
 
 import json

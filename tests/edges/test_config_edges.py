@@ -1,4 +1,4 @@
-"""Issue 14, items 1-3, 7, 13: paper-case identity, section overrides, YAML 1.2 numbers, impossible inputs."""
+"""Config edges: paper-case identity, section overrides, YAML 1.2 numbers, impossible inputs."""
 from __future__ import annotations
 
 import subprocess

@@ -1,4 +1,4 @@
-"""Issue 14 item 6: signals never land inside a write, stale temporaries go, DA runs restart bit-identically."""
+"""Signals never land inside a write, stale temporaries go, DA runs restart bit-identically."""
 from __future__ import annotations
 
 import os

@@ -1,4 +1,4 @@
-"""Small synthetic datasets shaped like the stage outputs (data contract, common.md items 1–3).
+"""Small synthetic datasets shaped like the stage outputs (docs/data-contract.md).
 
 Numbers are planted so tests know the exact answers: the 2D front moves at a constant speed until
 ``t_stop`` and then stays, so the shared flow-time definition returns ``t_stop`` exactly; DA scalars

@@ -42,7 +42,7 @@ def test_fig15_panels_and_lines(files):
     ax = axes[0]
     labels = [l.get_label() for l in ax.get_lines()]
     assert any(l.startswith("2D ISPH") for l in labels)
-    # the deposition line names its A, B reading (issue 27: plain reading labels)
+    # the deposition line names its A, B reading (plain reading labels)
     assert any(l.startswith("DA, with deposition (A, B: ") for l in labels) and "DA, no deposition" in labels
     assert axes[0].get_title(loc="left").startswith("(a) 1D-A30")  # Table 5 order
     text = " ".join(t.get_text() for t in fig.texts)

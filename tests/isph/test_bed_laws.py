@@ -1,4 +1,4 @@
-"""Bed laws (issue 25): the wall-friction kernels against plain NumPy, the robust rest rule, the
+"""Bed laws: the wall-friction kernels against plain NumPy, the robust rest rule, the
 sliding-layer physics that tells a rough bed from a Coulomb block, config errors, energy."""
 from __future__ import annotations
 

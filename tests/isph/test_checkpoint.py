@@ -1,4 +1,4 @@
-"""Issue 14: ISPH checkpoint/restart. A run stopped mid-run (a checkpoint written after step N, then
+"""ISPH checkpoint/restart. A run stopped mid-run (a checkpoint written after step N, then
 the process lost; or SIGTERM at an output time) and restarted from its checkpoint gives every array
 of the output bit for bit as the uninterrupted run: the renumbering every 10 steps, the warm-start
 arrays, the statistics, the energy budget and the time loop's counters survive the file."""

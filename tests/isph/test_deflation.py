@@ -1,4 +1,4 @@
-"""Deflated SSOR-CG (granudep.isph.deflation, issue 26): each kernel against a plain NumPy/SciPy
+"""Deflated SSOR-CG (granudep.isph.deflation): each kernel against a plain NumPy/SciPy
 reference, the solver against the direct solve and the SSOR-CG it deflates."""
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Energy budget of the ISPH runs (issue 11): discrete dissipation and the creation stop."""
+"""Energy budget of the ISPH runs: discrete dissipation and the creation stop."""
 import numpy as np
 import pytest
 import scipy.sparse as sp

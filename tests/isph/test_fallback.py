@@ -1,4 +1,4 @@
-"""The linear solver never crashes a run (issue 11 item 4): a CG breakdown (zero/negative curvature,
+"""The linear solver never crashes a run: a CG breakdown (zero/negative curvature,
 NaN, a ZeroDivisionError, no convergence) falls back to SuperLU for that step and is counted in
 the run file (``linear_solver_fallbacks``)."""
 import numpy as np
@@ -48,7 +48,7 @@ def test_planted_indefinite_matrix_is_a_reported_breakdown_not_an_exception():
 
 def test_zero_curvature_and_zero_diagonal_do_not_raise():
     # A = [[1, 2], [2, 1]] (eigenvalues 3, -1) with b on the -1 eigenvector: p·Ap < 0 at once;
-    # before, the zero-diagonal and zero-curvature cases raised ZeroDivisionError (issue 11)
+    # before, the zero-diagonal and zero-curvature cases raised ZeroDivisionError
     indptr = np.array([0, 2, 4])
     indices = np.array([0, 1, 1, 0])
     data = np.array([1.0, 2.0, 1.0, 2.0])
@@ -163,7 +163,7 @@ def test_singular_direct_solve_is_a_blow_up_not_a_crash():
 def test_amg_pressure_solver_runs_and_agrees_with_cg_dic():
     """numerics.pressure_solver amg_sa / amg_rs (pyamg): a short collapse without fallbacks, pressure
     within the round-off spread of the default at t = 0.02 s (the trajectories differ at solver
-    tolerance, see docs/paper-notes.md "Linear solvers")."""
+    tolerance, see docs/model.md "Linear solvers")."""
     pytest.importorskip("pyamg")
     ref = run_isph("T22-A70", dx=0.01, t_end=0.02)
     for m in ("amg_sa", "amg_rs"):

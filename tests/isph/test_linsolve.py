@@ -1,7 +1,7 @@
 """Numba Jacobi-CG (granudep.isph.linsolve): the same iterates as scipy's cg, bit for bit.
 
 Bitwise equality is the requirement (not a tolerance): the collapse amplifies solver-tolerance
-differences (docs/paper-notes.md, "Linear solvers"), so anything less would change the runs.
+differences (docs/model.md, "Linear solvers"), so anything less would change the runs.
 """
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""The fast adjoint-pair PPE paths (issue 26) against the assembled matrix and dense NumPy:
+"""The fast adjoint-pair PPE paths against the assembled matrix and dense NumPy:
 the matrix-free operator (``numerics.ppe_operator: matrix_free``), the PPE assembled as its two
 triangles for the SSOR-CG (``numerics.pressure_solver: cg_ssor``), their solvers against SuperLU,
 and the configuration errors."""

@@ -42,7 +42,7 @@ def test_the_incremental_predictor_starts_from_a_balanced_velocity():
     assert gp is not None
     g = 9.81
     interior = ~inc.fs
-    # the surface layers keep the ±5 % force error of G on a cut support (docs/paper-notes.md)
+    # the surface layers keep the ±5 % force error of G on a cut support (docs/model.md)
     assert np.max(np.abs(vs[interior])) < 0.1 * g * dt
     assert np.sqrt(np.mean(vs[interior] ** 2)) < 0.03 * g * dt
     # what the predictor removed is the hydrostatic gradient: −G pⁿ/ρ ≈ −g deep in the layer

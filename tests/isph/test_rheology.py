@@ -1,4 +1,4 @@
-"""μ(I) laws, the Barker–Gray well-posedness test and the partial regularisation (issue 11)."""
+"""μ(I) laws, the Barker–Gray well-posedness test and the partial regularisation."""
 import math
 
 import numpy as np

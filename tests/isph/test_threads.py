@@ -1,4 +1,4 @@
-"""Both cores (issue 12): the per-particle loops run in parallel (numba prange), each iteration
+"""Both cores: the per-particle loops run in parallel (numba prange), each iteration
 writing only its own particle/row, so the results do not depend on the thread count — bit for bit.
 Each run is a subprocess with its own NUMBA_NUM_THREADS (numba reads it at import)."""
 import json

@@ -1,4 +1,4 @@
-"""Synthetic, contract-shaped 2D run files for the monitor/regress tests (ISPH contract, common.md 2).
+"""Synthetic, contract-shaped 2D run files for the monitor/regress tests (ISPH contract, docs/data-contract.md).
 
 A run is a particle lattice (spacing dx, bed at y = 0, first row at dx/2) with planted velocities:
 the lowest ``m`` rows of a column are at rest (deposited), the rows above move at ``u_flow``.

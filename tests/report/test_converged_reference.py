@@ -1,4 +1,4 @@
-"""The converged 2D reference (issue 27): the finest ladder rung within the tolerance of the next coarser
+"""The converged 2D reference: the finest ladder rung within the tolerance of the next coarser
 one, else the workflow's run, every row labelled with its dx and why; the A, B readings' plain labels."""
 import math
 
@@ -13,7 +13,7 @@ from granudep.report.da_vs_reference import compare, reading_matrix, reference_f
 from granudep.report.readme_status import status_block
 
 L0 = 0.2
-# T22-A70's 1 % volume front on the ladder, ΔL/L0 at 4 / 3 / 2 / 1.4 / 1 mm (README, sessions 8-10):
+# T22-A70's 1 % volume front on the ladder, ΔL/L0 at 4 / 3 / 2 / 1.4 / 1 mm (the Coulomb-bed ladder of 2026-12-02):
 # steps +6.3 / +4.1 / +4.2 / +2.3 % of the finer rung, all but the first within 5 %
 LADDER_V99 = {0.004: 13.02, 0.003: 13.89, 0.002: 14.49, 0.0014: 15.13, 0.001: 15.49}
 

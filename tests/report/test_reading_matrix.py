@@ -1,4 +1,4 @@
-"""Issue 13: reading matrix, converged-reference selection, claims verdicts, x_inf fall-back (planted)."""
+"""Reading matrix, converged-reference selection, claims verdicts, x_inf fall-back (planted)."""
 import math
 from types import SimpleNamespace
 

@@ -18,8 +18,8 @@ def results(tmp_path):
     (r / "compare").mkdir()
     pd.DataFrame({"check": ["a", "a", "b"], "quantity": ["q1", "q2", "q3"], "passed": [True, True, True]}
                  ).to_csv(r / "verification/da.csv", index=False)
-    pd.DataFrame({"check": ["h", "dam_break"], "quantity": ["q", "E"], "passed": [True, False]}
-                 ).to_csv(r / "verification/isph.csv", index=False)
+    pd.DataFrame({"check": ["h", "dam_break", "surge"], "quantity": ["q", "E", "front"], "passed": [True, False, False],
+                  "tolerance": [0.1, 0.005, float("inf")]}).to_csv(r / "verification/isph.csv", index=False)
     pd.DataFrame({"claim_id": ["failure_plane_angle", "rest_time_T22-A70", "x"], "case": ["T22-A70"] * 3,
                   "paper_value": [55.8, 13.5, 1.0], "ours_paper_res": [61.23, 14.44, 1.0],
                   "verdict": ["not reproduced", "reproduced", "reproduced"]}).to_csv(r / "claims.csv", index=False)
@@ -36,7 +36,8 @@ def results(tmp_path):
 def test_block_reads_the_numbers_from_the_files(results):
     block = status_block(results)
     assert block.startswith(BEGIN) and block.endswith(END)
-    assert "DA 3 of 3 rows" in block and "2D ISPH 1 of 2 rows" in block and "`dam_break`" in block
+    assert "DA 3 of 3 checked rows pass; 0 reported" in block
+    assert "2D ISPH 1 of 2 checked rows pass; 1 reported (failing: `dam_break`)" in block
     assert "61.2° from the horizontal (paper 55.8°" in block
     assert "T22-A70 14.4 (paper ≈ 13.5)" in block
     assert "2 reproduced, 1 not reproduced, 0 not checkable of 3 claims" in block

@@ -1,4 +1,4 @@
-"""The SLURM route for real (issue 14 item 12): the CI configuration through `--profile profiles/slurm`
+"""The SLURM route for real: the CI configuration through `--profile profiles/slurm`
 on a live Slurm cluster gives the same files as the local run.
 
 Needs a reachable Slurm with accounting (the executor plugin polls `sacct`): on a single Debian

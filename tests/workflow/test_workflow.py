@@ -26,7 +26,7 @@ SINGLE_TARGETS = [
     ("results/da/1D-A70_nodeposition.nc", {"warmup": 1, "da_run": 1}),
 ]
 STUDY_TARGETS = [
-    ("convergence", "convergence_isph", 4),  # T22-A70 at 4, 3, 2, 1.4 mm (issue 11)
+    ("convergence", "convergence_isph", 4),  # T22-A70 at 4, 3, 2, 1.4 mm
     ("sensitivity", "sensitivity_da", 11),  # baseline + 2 values x 5 parameters
 ]
 USER_CASE = {"user_cases": [{"name": "my-column", "theta_deg": 20, "L0": 0.2, "H0": 0.12}]}
@@ -39,7 +39,7 @@ SCHEMA_REFUSALS = [
      "user_cases[0].H0: isph run 'x': geometry.H0: must be > 0.0"),
     ({"isph": {"dxx": 0.004}}, "isph.dxx: unknown key (allowed: cases, dx, dx_per_case, set, t_end, table5_geometries, threads)"),
 ]
-# Issue 14 item 4: each of these passed `snakemake -n` before and was refused only by the job.
+# Each of these once passed `snakemake -n` before and was refused only by the job.
 ONE_LINE_REFUSALS = [
     ("isph: {dx: .nan}\n", "isph.dx: must be a finite number (got nan)"),
     ("user_cases: [{name: steep, theta_deg: 30, L0: 0.2, H0: 0.1}]\n",
@@ -58,7 +58,7 @@ ONE_LINE_REFUSALS = [
      "isph.set.numerics.projection: isph run 'T10-A35': numerics.projection: must be one of"),
     ("isph: {set: {numerics.projection: approximate, wall.coulomb_normal: projection}}\n",
      "isph.set.wall.coulomb_normal: isph run 'T10-A35': wall.coulomb_normal: projection needs"),
-    # issue 15: an old key name is refused, naming the new one
+    # an old key name is refused, naming the new one
     ("isph: {set: {output.interval: 0.02}}\n",
      "isph.set.output.interval: isph run 'T10-A35': output.interval: renamed to output.dt_output"),
 ]
@@ -113,7 +113,7 @@ def test_default_config_schedules_the_whole_paper(workdir):
     assert not any(r.startswith(("convergence", "sensitivity")) for r in jobs)
     # paper resolution; every 2D run gets its dx
     assert out.count("--dx 0.004") == n2d
-    # the chain is the default product (issue 13): the DA runs with deposition use our computed A, B;
+    # the chain is the default product: the DA runs with deposition use our computed A, B;
     # the reading matrix adds one run per case for Table 5 read as normalised and as dimensional
     for case in ("1D-A30", "1D-A45", "1D-A70", "1D-A124"):
         assert (f"granudep da {case} --ab-source computed --coefficients results/regression/coefficients.csv"
@@ -126,7 +126,7 @@ def test_default_config_schedules_the_whole_paper(workdir):
 
 
 def test_summary_is_given_every_figure_with_its_caption(workdir):
-    """Issue 27: `snakemake -j2` made 17 figures and a summary saying "figures (not given)": the summary
+    """A regression: `snakemake -j2` once made 17 figures and a summary saying "figures (not given)": the summary
     rule must pass every figure the run draws as NAME=PATH, NAME having its caption workflow/report/NAME.rst."""
     rc, out, jobs = dry_run(workdir, "-j2")
     assert rc == 0, out
@@ -142,7 +142,7 @@ def test_summary_is_given_every_figure_with_its_caption(workdir):
 
 
 def test_converged_reference_is_the_ladders_converged_rung(workdir):
-    """Issue 27: the converged reference is chosen on the ladder's tolerance (compare.reference), the
+    """The converged reference is chosen on the ladder's tolerance (compare.reference), the
     workflow's runs first (the fall-back), the ladder's files after --ladder."""
     rc, out, jobs = dry_run(workdir, "-j2")
     assert rc == 0, out
@@ -166,7 +166,7 @@ def test_ci_profile_runs_the_whole_chain_small(workdir):
                 if src == "computed" else "--ab-source paper")
     assert f"granudep da 1D-A70 {expected} --n-particles 200" in out
     assert "granudep verify isph --quick" in out
-    # the summary also as HTML: the Snakemake report shows an .html result rendered (issue 14)
+    # the summary also as HTML: the Snakemake report shows an .html result rendered
     assert "granudep summary -o results/summary.md --html results/summary.html" in out
 
 

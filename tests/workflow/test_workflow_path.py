@@ -1,4 +1,4 @@
-"""`path_cases:` in the workflow (issue 16): dry runs only (prefetched, see wfhelp.py)."""
+"""`path_cases:` in the workflow: dry runs only (prefetched, see wfhelp.py)."""
 from __future__ import annotations
 
 import re

@@ -32,7 +32,7 @@ WARM = f"{RESULTS}/.numba_warm"
 
 USER_CASES = {c["name"]: c for c in config.get("user_cases", [])}
 
-# DA runs on the user's slope profiles (issue 16): name -> entry {name, config, n_particles?}. The
+# DA runs on the user's slope profiles: name -> entry {name, config, n_particles?}. The
 # YAML (with geometry.path) and its path CSV are the runs' inputs; both must exist when parsing.
 PATH_CASES = {c["name"]: c for c in config.get("path_cases", [])}
 

@@ -1,4 +1,4 @@
-# DA runs against the 2D references (Section 4.3, Figs 15-16) and the reading matrix (issue 13).
+# DA runs against the 2D references (Section 4.3, Figs 15-16) and the reading matrix.
 # Two 2D references, same front and flow-time rules as the DA runs:
 #   - paper resolution: the 2D ISPH runs of this workflow (isph.dx);
 #   - converged: per case, among those runs and the files matched by compare.reference.runs (the

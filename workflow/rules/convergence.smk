@@ -1,4 +1,4 @@
-# Convergence study (issue 5): T22-A70 in 2D at three particle spacings (runout, flow time,
+# Convergence study: T22-A70 in 2D at three particle spacings (runout, flow time,
 # critical times) and the DA cases at three particle counts. Target `convergence`, not in `all`.
 
 CONV = config["convergence"]
@@ -100,7 +100,7 @@ rule convergence:
         f"{RESULTS}/figures/convergence.png",
 
 
-# --- Reference runs (issue 12): the four Table 5 geometries at 22° and T22-A70 at the reference dx ---
+# --- Reference runs: the four Table 5 geometries at 22° and T22-A70 at the reference dx ---
 # `snakemake -j2 reference_runs`; compare.reference.runs picks them up as the converged reference.
 REF_DX = CONV.get("reference_dx", 0.002)
 REF_CASES = CONV.get("reference_cases", ["T22-A30", "T22-A45", "T22-A70", "T22-A124"])

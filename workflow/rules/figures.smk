@@ -65,7 +65,7 @@ for _name in ACTIVE_FIGURES:
             "MPLBACKEND=Agg granudep figure {params.name} -o {output} {input} > {log} 2>&1"
 
 
-# Figures beyond the paper's numbering (issue 13): the reading matrix and the eq-36 residuals.
+# Figures beyond the paper's numbering: the reading matrix and the eq-36 residuals.
 EXTRA_FIGURES = {
     "reading-matrix": f"{RESULTS}/figures/reading_matrix.png",
     "fig12r": f"{RESULTS}/figures/fig12_residuals.png",

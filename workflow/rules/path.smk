@@ -1,4 +1,4 @@
-# DA runs on the user's slope profiles (issue 16, `path_cases:` in the config): each entry's YAML
+# DA runs on the user's slope profiles (`path_cases:` in the config): each entry's YAML
 # (geometry.path, see config/da/example_path.yaml) runs with and without deposition (da.variants),
 # A and B as that YAML says; then the profile figure with the deposit and the envelopes.
 

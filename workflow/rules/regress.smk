@@ -34,7 +34,7 @@ DIAGNOSIS_OUTPUTS = {
 
 rule regress_diagnose:
     """Eq 36 refitted with one method choice changed at a time (gate section, onset, velocity
-    threshold, h_T u, x_inf placement, W_M): why R² is low and A, B jump (issue 13)."""
+    threshold, h_T u, x_inf placement, W_M): why R² is low and A, B jump."""
     input:
         sections=expand(f"{RESULTS}/sections/{{case}}.nc", case=REGRESS_CASES),
         isph=expand(f"{RESULTS}/isph/{{case}}.nc", case=REGRESS_CASES),

@@ -1,4 +1,4 @@
-# Sensitivity study (beyond the paper; issue 5): one parameter at a time away from its paper value
+# Sensitivity study (beyond the paper): one parameter at a time away from its paper value
 # -> its effect on A, B (eq 36) and on the DA runout. Target `sensitivity`, not in `all`.
 #   phi_internal_deg, phi_basal_deg: rerun the 2D case (coarser dx) and the DA case with the angle
 #   free_surface_threshold: rerun the 2D case with the ISPH free-surface ∇·r threshold (paper 1.6)

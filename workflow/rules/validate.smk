@@ -1,4 +1,4 @@
-# Parse-time validation (issue 14 item 4): every job's stage config is built here with the stage's
+# Parse-time validation: every job's stage config is built here with the stage's
 # own builder, from the same values the rule's shell command passes to `granudep`, so
 # `snakemake -n` refuses exactly what the jobs would, in one line, before any job runs.
 # (Keep each job below in step with its rule's command line.)

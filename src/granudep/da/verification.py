@@ -2,7 +2,7 @@
 solution (``analytic.py``), returning rows of the table ``granudep verify da`` writes.
 
 Columns: check, quantity, value, reference, error, tolerance, passed, note. ``error`` is the
-quantity named in ``note`` (relative or normalised), ``passed`` is ``error <= tolerance``.
+quantity named in ``note`` (relative or normalised), ``passed`` is ``|error| <= tolerance`` (``granudep.verification_gate``).
 The tests in ``tests/da`` call the same functions and assert ``passed``; the tolerances are the
 measured errors at the stated resolution rounded up (docs/paper-notes.md, DA model).
 
@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from ..config import build
+from ..verification_gate import row_passed
 from . import analytic as an
 from .config import DAConfig
 from .physics import earth_pressure_coefficients
@@ -29,7 +30,7 @@ COLUMNS = ["check", "quantity", "value", "reference", "error", "tolerance", "pas
 
 def _row(check, quantity, value, reference, error, tolerance, note):
     return {"check": check, "quantity": quantity, "value": float(value), "reference": float(reference),
-            "error": float(error), "tolerance": float(tolerance), "passed": bool(error <= tolerance),
+            "error": float(error), "tolerance": float(tolerance), "passed": row_passed(error, tolerance),
             "note": note}
 
 

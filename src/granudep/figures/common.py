@@ -162,7 +162,7 @@ def kind_of(path) -> str:
         cols = set(pd.read_csv(p, nrows=0).columns)
         if {"t_s_critical", "x_norm"} <= cols:
             return "critical"
-        if "runout_rel_error" in cols:  # before A, B: compare tables carry the DA run's A, B (issue 13)
+        if "runout_rel_error" in cols:  # before A, B: compare tables carry the DA run's A, B
             return "compare"
         if {"A", "B"} <= cols:
             return "coefficients"

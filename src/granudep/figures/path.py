@@ -1,4 +1,4 @@
-"""Runout on a path profile (issue 16): the bed with the release and the final deposit drawn on
+"""Runout on a path profile: the bed with the release and the final deposit drawn on
 it, the travel-angle line, and the along-path envelopes (max depth, max speed, arrival time) of
 one or two DA path runs (with / without deposition). Command: ``granudep path-figure -o OUT.png
 RUN.nc [RUN2.nc]`` (registered by ``granudep.da.cli``; not one of the paper's figures, so not in

@@ -51,7 +51,7 @@ def fig12(critical, coefficients=None):
 
 
 def fig12_residuals(diagnosis, residuals):
-    """Residual plot of eq 36 (issue 13): (a) baseline residuals vs [x] per case (colour: a);
+    """Residual plot of eq 36: (a) baseline residuals vs [x] per case (colour: a);
     (b) R² of each refit variant per case vs a; (c) A per variant vs a at each θ."""
     import pandas as pd
     diag = load_table(diagnosis, ("case", "a", "theta_deg", "variant", "A", "r2"), "fig12r diagnosis.csv")

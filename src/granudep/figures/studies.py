@@ -36,7 +36,7 @@ FRONT_MIN_LAYERS = 2.0
 
 
 def _front_row(ds) -> dict:
-    """ΔL/L0 of the robust front measures of a 2D run (issue 11) and its time to rest t_s/t_c; an
+    """ΔL/L0 of the robust front measures of a 2D run and its time to rest t_s/t_c; an
     attached front whose thickness threshold spans fewer than FRONT_MIN_LAYERS particle layers
     (threshold < 2 dx: a sheet one particle thick reads as that thickness) is not resolved: NaN."""
     L0, dx, d = float(ds.attrs["L0"]), float(ds.attrs["dx"]), float(ds.attrs["d"])
@@ -139,7 +139,7 @@ def convergence(isph=(), critical=(), da=(), x_norms=(0.2, 0.4, 0.6, 0.8)):
     hide_unused(axes, len(panels))
     note(fig, "Finer resolution to the right. 2D fronts (a): the 1 % volume front and the attached fronts at 5 mm and "
               "2 d, each drawn only where its thickness spans >= 2 particle layers; t_s: max speed < 0.1 m/s. "
-              "DA fronts: depth >= the file's front_depth_threshold (docs/paper-notes.md, Shared definitions).")
+              "DA fronts: depth >= the file's front_depth_threshold (docs/model.md, Shared definitions).")
     return fig
 
 

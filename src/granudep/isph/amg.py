@@ -5,7 +5,7 @@ a fresh hierarchy every step (the matrix pattern changes every step: the neighbo
 and the free-surface set, i.e. the unknowns, moves), one V-cycle per CG iteration, warm start from
 the previous pressure, and the same stopping test as ``cg_dic``: the true residual
 ‖b − A x‖₂ < rtol ‖b‖₂ of the returned x. Measured against ``cg_dic`` (MIC(0)-CG) on T22-A150 PPE
-systems at 3.5k–57k unknowns (docs/paper-notes.md, "Linear solvers: AMG (session 5)"): the
+systems at 3.5k–57k unknowns (docs/model.md, "Linear solvers: AMG"): the
 iteration count is nearly independent of N (8–11), but the hierarchy set-up alone costs more than
 the whole MIC-CG solve at every size measured, so it is not the default.
 Return convention of :mod:`.linsolve`: (x, iterations, info), info 0 on convergence,

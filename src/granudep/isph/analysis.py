@@ -8,7 +8,7 @@ the initial column: it separates the particles that the collapse mobilises from 
 the static block behind it. So it is measured on the particles' *initial* positions (x0, y0), not
 on where they are at the time of measurement (the moving wedge has already slumped and sheared by
 then), and reported from the horizontal (angle from the bed + θ). Decision and numbers:
-docs/paper-notes.md, "Failure plane".
+docs/model.md, "Failure plane".
 """
 from __future__ import annotations
 
@@ -76,7 +76,7 @@ def moving_share(u: np.ndarray, v: np.ndarray, speed: float = CRITICAL_SPEED) ->
 
 def time_to_rest_mass_share(time: np.ndarray, u: np.ndarray, v: np.ndarray, share: float = 0.99,
                             speed: float = CRITICAL_SPEED, duration: float = 0.1) -> float:
-    """The robust rest rule (issue 25): the start of the first window of ``duration`` in which at
+    """The robust rest rule: the start of the first window of ``duration`` in which at
     least ``share`` of the mass moves slower than ``speed`` (at most 1 − share moves faster), after
     the flow has started (more than 1 − share of the mass once moved at ``speed``). NaN when the
     record never rests that long. Beside the every-particle rule of the run (``time_to_rest``: the

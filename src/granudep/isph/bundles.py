@@ -1,4 +1,4 @@
-"""The bundles the ISPH kernels take (issue 15): one home for the pair list and one for the wall
+"""The bundles the ISPH kernels take: one home for the pair list and one for the wall
 surface, instead of five to seven loose arrays per kernel call.
 
 Both are ``NamedTuple`` s of arrays: numba passes them to ``njit(cache=True)`` and ``prange`` kernels

@@ -1,4 +1,4 @@
-"""Checkpoint/restart of ISPH runs (issue 14: long runs survive interruption).
+"""Checkpoint/restart of ISPH runs (long runs survive interruption).
 
 The state of a run is one :class:`granudep.isph.solver.RunState`: the solver (particle arrays in
 their current renumbering, ``ids``, the warm-start arrays ``visc_du``/``visc_dv``/``visc_dt``,

@@ -1,4 +1,4 @@
-"""SSOR-CG with an aggregation deflation space for the adjoint-pair PPE (issue 26).
+"""SSOR-CG with an aggregation deflation space for the adjoint-pair PPE.
 
 The SSOR-preconditioned CG (:func:`linsolve.pcg_dic_split`, symmetric Gauss-Seidel in the Eisenstat
 form) removes the rough part of the error in one pass over the matrix per iteration, but not the
@@ -33,14 +33,14 @@ Cholesky factor) is done on every call: the matrix changes every step. Above ``C
 aggregates the dense coarse factor would cost more than it saves (n_c³ / 3 flops); the solve is
 then :func:`linsolve.pcg_dic_split`'s (no deflation).
 
-Cost (one thread, docs/speed.md, session 16): an iteration is 1.5-1.65x an Eisenstat SSOR iteration
+Cost (one thread, docs/performance.md): an iteration is 1.5-1.65x an Eisenstat SSOR iteration
 (the scatter, the coarse correction, A P) and the set-up ~5 sweeps (aggregation, A P, A_c, its
 factor). Through T22-A70 runs the solve is 0-30 % slower at 7k unknowns (2 mm: 29-52 SSOR iterations
 against 17-27), 0-28 % faster at 14.5k (1.4 mm: 35-69 against 17-27) and about twice as fast at 28k
 (1 mm: 64-72 against 18-19); ``numerics.deflation_min_unknowns`` (12 000) picks it from there on.
 
 Results: the same operator and stopping test as the SSOR-CG, so the solutions agree within the
-solver tolerance (not bit for bit); the runout check is in docs/speed.md.
+solver tolerance (not bit for bit); the runout check is in docs/performance.md.
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Mechanical energy budget of an ISPH run (per unit width, J m⁻¹), issue 11.
+"""Mechanical energy budget of an ISPH run (per unit width, J m⁻¹).
 
     E_kin + E_pot + D = E_0 − (numerical dissipation) + (numerical creation)
 

@@ -1,11 +1,11 @@
-"""Keep freed memory in the process heap so that the per-step arrays do not page-fault (issue 26).
+"""Keep freed memory in the process heap so that the per-step arrays do not page-fault.
 
 Every ISPH step allocates its arrays afresh (neighbour list, divergence entries, the PPE
 triangles, the CG vectors: ~22 MB per PPE assembly at 15 000 particles) and frees them at the end
 of the step. glibc serves blocks above its mmap threshold (128 kB, raised dynamically to the
 largest block freed) by ``mmap`` and gives the top of the heap back to the OS above its trim
 threshold; each new step then touches fresh pages, one minor page fault (a zeroed 4 kB page) each.
-Measured on T22-A150 after 0.3 s (one thread, idle 2-core machine, session 15): 1090 faults per
+Measured on T22-A150 after 0.3 s (one thread, idle 2-core machine): 1090 faults per
 step at 3750 particles and 4512 at 15 000 with glibc's defaults, 144 and 761 with the thresholds
 below; forcing the static 128 kB thresholds against these, in one process, alternating blocks of
 five steps: 31.9 -> 25.5 ms/step at 3750 and 172 -> 137 at 15 000 (about 2.8 µs per fault).

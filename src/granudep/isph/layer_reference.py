@@ -1,4 +1,4 @@
-"""A converged 1D reference for uniform μ(I) layers on an incline (session 13, issue 25).
+"""A converged 1D reference for uniform μ(I) layers on an incline.
 
 A layer of thickness h, infinite and uniform down-slope, no-slip bed, stress-free surface, obeys
 
@@ -37,7 +37,7 @@ class LayerMaterial:
     i0: float = 0.279
     eta_max: float = 5.0e3
     #: viscosity floor (Pa s); 0 as in the 2D solver (whose 1e-3 Pa s floor never acts here). Basilisk's
-    #: granular.h floors η at ρ D sqrt(g D) = 0.13 Pa s: set it to read its thin layers (session 14)
+    #: granular.h floors η at ρ D sqrt(g D) = 0.13 Pa s: set it to read its thin layers
     eta_min: float = 0.0
 
     @classmethod

@@ -9,7 +9,7 @@ x += α p, r −= α q. The dot products go through ``np.dot`` (BLAS ddot, the s
 ``dot`` and ``linalg.norm`` use; bitwise equality checked in tests/isph/test_linsolve.py); the CSR
 product sums each row in storage order from 0, as scipy's ``csr_matvec`` does. Why bit-for-bit:
 the collapse amplifies differences at the solver tolerance (T22-A70 at dx = 1 cm: the kinetic
-energy at t = 1 s moves by 26 % between solver_rtol 1e-8 and 1e-10, see docs/paper-notes.md),
+energy at t = 1 s moves by 26 % between solver_rtol 1e-8 and 1e-10, see docs/model.md),
 so a solver that only agrees "to within the tolerance" would not reproduce the existing runs.
 
 :func:`pcg_jacobi_pair` solves the two implicit viscous systems (u and v) in lock-step: the
@@ -18,7 +18,7 @@ the kernels write it), so each sweep over the off-diagonal entries serves both p
 the two recurrences is exactly the single-system one (each stops on its own test).
 
 Return convention: (x, iterations, info) with info = 0 on convergence, ``maxiter`` otherwise
-(scipy's), and x = b when ‖b‖ = 0. Breakdowns never raise (issue 11 item 4): info = -1 for a
+(scipy's), and x = b when ‖b‖ = 0. Breakdowns never raise: info = -1 for a
 non-positive incomplete-Cholesky pivot, ``BREAKDOWN`` (-2) for a curvature p·Ap that is not
 positive (zero, negative or NaN: A singular or indefinite), a zero or non-positive ρ = r·z or a
 zero diagonal, and ``NONFINITE`` (-3) for a right-hand side with NaN/inf; x is then the last
@@ -513,7 +513,7 @@ def ssor_diagonal(diag, omega=1.0):
     """SSOR pivots (``mic = -omega < 0`` in :func:`pcg_dic`): d̃ = diag(A)/ω, M ∝ (D/ω + L) (D/ω)⁻¹
     (D/ω + U); ω = 1 is the symmetric Gauss-Seidel preconditioner. SPD for any SPD A and 0 < ω < 2
     (no factorisation, no breakdown for a positive diagonal). For the adjoint-pair PPE, where
-    incomplete Cholesky breaks down (issue 26). Returns (d̃, first row with a diagonal that is not
+    incomplete Cholesky breaks down. Returns (d̃, first row with a diagonal that is not
     positive, or -1)."""
     dt = diag / omega
     for i in range(diag.size):
@@ -1012,7 +1012,7 @@ def _two_level_setup(indptr, indices, data):
 
 
 # ------------------------------------------------------------------------------------------------
-# Two-level CG on the matrix-free adjoint-pair PPE (``numerics.ppe_operator: matrix_free``, issue 26)
+# Two-level CG on the matrix-free adjoint-pair PPE (``numerics.ppe_operator: matrix_free``)
 #
 # The operator is :func:`projection.matrix_free_ppe`'s op = (wd, D_U by row, D_U by particle, ε L_c);
 # A x = wd D_U (D_Uᵀ x) + ε L_c x, both products as gathers (D_Uᵀ x by particle, then D_U by row),

@@ -203,7 +203,7 @@ def velocity_gradient(pairs, nf, vol, x, y, u, v, lmat, walls, slip, slip_length
                 ny = wny[w]
                 # linear extrapolation to the wall particle, not capped at Morris's β = 1.5: the
                 # renormalised gradient is then exact for a linear profile through the wall value
-                # (docs/paper-notes.md, "Kernel design notes")
+                # (docs/model.md, "Kernel design notes")
                 beta = wall_beta_linear(x[i], y[i], nx, ny, wc[w], x[j], y[j], slip, slip_length, dx)
                 if slip == SLIP_COULOMB:
                     beta = 0.0  # the granular particle slides on the wall; friction is a contact force
@@ -244,7 +244,7 @@ def divergence(pairs, nf, vol, u, v, lmat):
     """∇·u_i = tr(L_i Σ_j V (u_j − u_i) ⊗ ∇_i W_ij) over granular neighbours (walls enter through
     the pressure Neumann condition, not here). With the renormalisation L (identity where the
     support is too sparse) the divergence of any linear velocity field is exact, also with a
-    one-sided support (why it matters: docs/paper-notes.md, "Kernel design notes")."""
+    one-sided support (why it matters: docs/model.md, "Kernel design notes")."""
     start, nbr, rx, ry, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.gw
     div = np.zeros(nf)
     for i in prange(nf):
@@ -305,7 +305,7 @@ def pressure_gradient(pairs, nf, vol, p, us, vs, lmat, walls, dt, rho, detached)
 def smoothed_gradient(pairs, nf, h, gx, gy):
     """Kernel (Shepard) average of a granular particle field's gradient over each support: the
     surface normal of the shifting (rather than the raw ∇C, which points at the nearest clump of
-    surface particles: docs/paper-notes.md, "Kernel design notes")."""
+    surface particles: docs/model.md, "Kernel design notes")."""
     start, nbr, wk = pairs.start, pairs.nbr, pairs.wk
     sx = np.zeros(nf)
     sy = np.zeros(nf)

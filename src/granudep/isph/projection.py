@@ -1,4 +1,4 @@
-"""Energy-consistent projection (issue 11): the PPE divergence as the negative adjoint of the
+"""Energy-consistent projection: the PPE divergence as the negative adjoint of the
 pressure gradient that the corrector applies.
 
 The corrector applies G p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij (renormalised, :func:`operators.pressure_gradient`;
@@ -18,7 +18,7 @@ D u_k = tr A + u_k·(L_k + L̄_j) Σ_j V ∇_k W_kj + …: on a support cut by a
 velocity normal to the wall, but on a disordered cloud Σ_j V ∇_k W_kj ≠ 0 and a uniform translation
 reads as divergence of order |u| × disorder / h (tests/isph/test_projection.py). That zero-order
 inconsistency is why this option damps the water dam break (−58 % of E_ref by t = 0.4 s at dx = 4 mm
-instead of +20 %) and is not the default (docs/paper-notes.md, "Energy budget").
+instead of +20 %) and is not the default (docs/model.md, "Energy-stable projection").
 """
 from __future__ import annotations
 
@@ -587,7 +587,7 @@ def wall_normal_acceleration(pairs, nf, vol, lmat, walls, p, rho, planes):
 
 
 # ------------------------------------------------------------------------------------------------
-# Matrix-free PPE (``numerics.ppe_operator: matrix_free``, issue 26): the assembled product D Dᵀ has
+# Matrix-free PPE (``numerics.ppe_operator: matrix_free``): the assembled product D Dᵀ has
 # ~63 entries per row and its Gustavson assembly cost as much as ~40 products with it (T22-A150,
 # 3750 particles). Applied as D_U (D_Uᵀ x) + ε L_c x it is the same matrix (the same sums in another
 # order: products agree to ~1e-15 relative, tests/isph/test_ppe_free.py) from ~19 D entries and ~18
@@ -725,7 +725,7 @@ def adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_un
     up = np.zeros(m + 1, np.int64)
     # a dense accumulator over the unknowns, zero between rows, and the row's distinct columns
     # listed without a branch (``mark[c] == a`` once c is listed for row a): one dependent load per
-    # multiply-add instead of the slot map's two, no unpredictable first-visit branch (session 15)
+    # multiply-add instead of the slot map's two, no unpredictable first-visit branch
     mark = np.full(m, -1, np.int64)
     acc = np.zeros(m)
     # the part of column i below the diagonal of row a starts at head[i]: rows ascend, so the head

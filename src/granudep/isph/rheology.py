@@ -1,4 +1,4 @@
-"""μ(I) friction laws of the 2D runs and their well-posedness (issue 11).
+"""μ(I) friction laws of the 2D runs and their well-posedness.
 
 - eq (5) of the paper (Jop et al. 2006), written as the extended law of Barker & Gray (2017, eq 2.21)
   μ(I) = (μ_s I_0 + μ_2 I + μ_∞ I²)/(I_0 + I) (μ_∞ = 0: eq 5 exactly);

@@ -18,7 +18,7 @@ from .parallel import prange_kernel
 def surface_band(pairs, nf, fs, h, r_ref):
     """Weight α ∈ [0, 1] of the bed-normal part of the shift that is removed (Lind et al. 2012):
     1 on free-surface particles, Σ_{j free-surface} W_ij / W(r_ref) (at most 1) below them, where the
-    truncated support gives ∇C a normal part (docs/paper-notes.md, "Kernel design notes"). With r_ref = 2 dx the second and third layers of a lattice get α = 1 and the weight
+    truncated support gives ∇C a normal part (docs/model.md, "Kernel design notes"). With r_ref = 2 dx the second and third layers of a lattice get α = 1 and the weight
     goes to 0 with W at the edge of the support (2.6 dx), so it is continuous in the positions (a
     0/1 band switched by a neighbour crossing the support radius turns round-off into different
     runs)."""

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..cases import G
+from ..verification_gate import row_passed
 from .config import load_config
 from .layer_reference import bagnold_initial, uniform_layer
 from .solver import IsphSolver, step_towards
@@ -20,7 +21,7 @@ COLUMNS = ["check", "quantity", "value", "reference", "error", "tolerance", "pas
 
 
 def _row(check, quantity, value, reference, error, tolerance, note=""):
-    ok = bool(abs(error) <= tolerance) if math.isfinite(error) else math.isinf(tolerance)
+    ok = row_passed(error, tolerance)  # a row without a finite tolerance is reported, never passed
     return {"check": check, "quantity": quantity, "value": float(value), "reference": float(reference),
             "error": float(error), "tolerance": float(tolerance), "passed": ok, "note": note}
 
@@ -49,7 +50,7 @@ def hydrostatic(quick: bool = False) -> list[dict]:
     1 mm/s and the bed pressure (bottom particles' p extrapolated by ρ g dx/2) is within 3 % of ρ g H.
     dx = 2.5 mm (20 layers) in the quick mode too (about a second): at 5 mm (10 layers) the incremental
     pressure correction's bed pressure reads 3.6 % high (non-incremental 2.4 %), at 2.5 mm 1.6 % (1.4 %),
-    docs/paper-notes.md, session 9."""
+    docs/model.md, "Incremental pressure correction"."""
     dx = 0.0025
     height = 0.05
     cfg = load_config(layer_config(0.0, height, dx))
@@ -147,26 +148,25 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     u(y) = (2/3)(I_θ/d) sqrt(φ g cosθ) [h^{3/2} − (h−y)^{3/2}], I_θ = I0 (tanθ − μ_s)/(μ_2 − tanθ).
 
     The layer starts from the analytic profile and runs 10 s; the error is the relative L2 error of
-    the particle velocities averaged over t = 7.5..10 s (sessions 3-10: 4.5..5 s, before the 1 mm
-    layer had settled, see BAGNOLD_T_END). The solver's own steady state takes seconds to
-    settle (relaxation time u_s/(g cosθ μ'(I_θ) I_θ) ≈ 2 s): at t = 1 s, the window used before
-    session 3, the 0.5 mm error was still 3.3 % on its way to 4.6 %, and the 1 mm one 3.7 % on its
+    the particle velocities averaged over t = 7.5..10 s (an earlier 4.5..5 s window read the 1 mm
+    layer before it had settled, see BAGNOLD_T_END). The solver's own steady state takes seconds to
+    settle (relaxation time u_s/(g cosθ μ'(I_θ) I_θ) ≈ 2 s): at t = 1 s, the first window used, the 0.5 mm error was still 3.3 % on its way to 4.6 %, and the 1 mm one 3.7 % on its
     way down to 2.5 %. The test is severe: μ(I) is flat (d ln μ/d ln I ≈ 0.1 at I_θ), so a 1 % error in
     the shear stress or the pressure moves the shear rate by ~10 %.
-    Target L2 ≤ 3 % (issue 3), checked at dx = 1 mm and 0.5 mm (quick: 1 mm only, no coarse rows). Measured
-    (session 4, shifting band `numerics.shifting_surface: band`): 2.6 % at 1 mm, 1.4 % at 0.5 mm
-    (first order). Before (session 3, shift normal part removed on the free-surface particles
+    Target L2 ≤ 3 %, checked at dx = 1 mm and 0.5 mm (quick: 1 mm only, no coarse rows). Measured
+    (shifting band `numerics.shifting_surface: band`): 2.6 % at 1 mm, 1.4 % at 0.5 mm
+    (first order). Before the band (shift normal part removed on the free-surface particles
     only): 2.5 % / 4.6 %, the error growing with refinement: the truncated support one layer under
     the surface pushed that layer up into the surface layer at every step, the top layer sat 0.25 dx
     low and the pressure of the whole layer ≈ 1.1 Pa (0.15 dx of overburden) low, which raised
-    μ(I) = τ/p and the shear rate (+4–12 %). See docs/paper-notes.md.
+    μ(I) = τ/p and the shear rate (+4–12 %). See docs/model.md.
     Also reported (no tolerance): the same layer at the collapse resolutions dx = 4 and 2 mm, 5 and 10
-    particles over the depth, over t = 10..20 s (they never settle). Measured (session 4, at 4.5..5 s): L2 30 % and 8 % (mean u / analytic 0.70 and 0.92;
+    particles over the depth, over t = 10..20 s (they never settle). Measured (shifting band, at 4.5..5 s): L2 30 % and 8 % (mean u / analytic 0.70 and 0.92;
     sampling every step instead of every 0.05 s gave 22 % and 13 %: at 5–10 particles the layer is
     not steady), the shear rate 15–30 % low across the depth at 4 mm, with the pressure 1–8 % above
     hydrostatic (through the flat μ(I) that accounts for much of it): thin μ(I) flows are too stiff at
     coarse dx, which is why the T22-A70 runout grows under refinement
-    (docs/paper-notes.md, "Runout vs resolution")."""
+    (CHANGELOG.md, the 2026-11-22 measurements)."""
     rows = []
     for dx in ((0.001,) if quick else (0.001, 0.0005)):
         rows.append(_bagnold_row(dx, theta_deg, t_end=BAGNOLD_T_END, t_avg=BAGNOLD_T_AVG))
@@ -177,11 +177,11 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     return rows
 
 
-#: Bagnold windows (session 11). The 1 mm layer settles in ~7 s (mean u / analytic 0.9893 at 4 s,
+#: Bagnold windows. The 1 mm layer settles in ~7 s (mean u / analytic 0.9893 at 4 s,
 #: 0.9798 at 7.5 s, 0.9792 from 10 to 20 s; L2 2.3 % at 5 s, 2.53 % steady): the checked rows
 #: average over 7.5..10 s. At 4 and 2 mm (5 and 10 particles over the depth) the layer never settles:
 #: its mean speed wanders between 0.97 and 1.12 of Bagnold's for 30 s, and the 0.5 s window at
-#: 4.5..5 s used until session 10 read 0.983 at 4 mm (session 9: 0.909), and 1.036 for the same run
+#: 4.5..5 s used before read 0.983 at 4 mm (0.909 with the non-incremental scheme), and 1.036 for the same run
 #: with outputs every 0.05 s from 0.5 s (the steps clipped to the output times change the
 #: trajectory); those rows average over 10..20 s and report the spread.
 BAGNOLD_T_END, BAGNOLD_T_AVG = 10.0, 2.5
@@ -279,9 +279,9 @@ def decelerating_layer(quick: bool = False) -> list[dict]:
     (:func:`layer_reference.uniform_layer`, 20 cells, to 1e-4 m/s of its 80-cell solution). Checked:
     the largest difference of the mean speed over t ≤ 1 s, ≤ 0.03 m/s (3 % of the launch speed, the
     Bagnold check's 3 %) with 10 particles across the layer (h = 20 mm at 2 mm; full suite also h =
-    10 mm at 1 mm). Measured (session 13): 0.027 and 0.022 m/s. Reported (no tolerance, full suite):
+    10 mm at 1 mm). Measured: 0.027 and 0.022 m/s. Reported (no tolerance, full suite):
     sheets 2 and 3 particles thick, the regime of the T22 fronts, where every first-layer treatment
-    errs by 0.08–0.38 m/s (``benchmarks/decelerating_layer.py``, docs/paper-notes.md)."""
+    errs by 0.08–0.38 m/s (``benchmarks/decelerating_layer.py``, docs/model.md)."""
     rows = [_decelerating_row(0.02, 0.002, 0.03)]
     if not quick:
         rows.append(_decelerating_row(0.01, 0.001, 0.03))
@@ -325,9 +325,9 @@ def collapse_t22a70(quick: bool = False) -> list[dict]:
 
 def flat_collapse_config(material: str = "glass_beads", aspect: float = 0.5, dx: float = 0.002, L0: float = 0.1,
                          **numerics) -> dict:
-    """Granular column collapse on a horizontal bed (issue 11's flat cases): a column L0 long and
-    a·L0 high of a Table 2 material against the back wall, 0.6 m of bed, the default bed law (no slip
-    since session 12; φ_B = φ of the material for the Coulomb and stress-limited laws), default scheme
+    """Granular column collapse on a horizontal bed (the θ = 0 convergence cases): a column L0 long and
+    a·L0 high of a Table 2 material against the back wall, 0.6 m of bed, the default bed law (no slip;
+    φ_B = φ of the material for the Coulomb and stress-limited laws), default scheme
     otherwise; run to rest."""
     from ..cases import check_case_name, material as table2_material
     if not aspect > 0.0:
@@ -425,10 +425,10 @@ def martin_moyce_comparison(t, front_tail, front_v99, a: float) -> dict:
 
 
 def dam_break_approximate(quick: bool = False) -> list[dict]:
-    """The dam break with the scheme of sessions 1–6 (``numerics.projection: approximate`` with the
+    """The dam break with the earlier approximate scheme (``numerics.projection: approximate`` with the
     per-step density source, ``numerics.density_relaxation_form: per_step``), reported (no tolerance on the energy; its stability row still counts):
     its pressure creates energy (+62 % of E_ref by t = 1 s at 4 mm; 2 mm blows up), which is why it
-    is no longer the default (docs/paper-notes.md). 8 mm (quick) or 4 mm."""
+    is no longer the default (docs/model.md). 8 mm (quick) or 4 mm."""
     return dam_break(quick, projection="approximate", resolutions=(0.008,) if quick else (0.004,),
                      tolerance=math.inf, numerics={"density_relaxation_form": "per_step"})
 

@@ -1,6 +1,6 @@
 """Per-section onset of deposition, deposition rate and critical DA momentum (Section 4.2, Figs 9, 11).
 
-Rules (docs/paper-notes.md, "Monitoring sections and regression"):
+Rules (docs/model.md, "Monitoring sections and regression"):
 
 * onset (t_s)_C: the last upward crossing of h_D = ε (ε = onset_depth_factor·dx, default half a
   particle spacing), i.e. the first time after which h_D stays ≥ ε until the end of the record,

@@ -1,4 +1,4 @@
-"""Why is R² of eq 36 low, and why do A, B jump across a? One refit per choice (issue 13, item 4).
+"""Why is R² of eq 36 low, and why do A, B jump across a? One refit per choice.
 
 For every case, eq 36 ((hu)_C/p0 = A[x] + B) is refitted with one choice of the method changed at a
 time, from the same monitoring sections:

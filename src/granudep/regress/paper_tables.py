@@ -54,7 +54,7 @@ def table3_comparison(critical: pd.DataFrame) -> pd.DataFrame:
 
 
 def run_name_for(table5_case: str, theta_deg: float) -> str:
-    """1D-A30 → T22-A30 (the 2D run of the same geometry, common.md item 2)."""
+    """1D-A30 → T22-A30 (the 2D run of the same geometry, docs/data-contract.md)."""
     return f"T{theta_deg:g}-{table5_case.split('-', 1)[1]}"
 
 

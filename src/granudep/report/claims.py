@@ -1,4 +1,4 @@
-"""The claims scorecard (issue 13): every quantitative claim of the paper, with our numbers.
+"""The claims scorecard: every quantitative claim of the paper, with our numbers.
 
 One row per claim: the paper's value (from the paper's tables shipped with granudep, or from
 ``data/paper_claims.csv``, which names the paper's section for each), ours at paper resolution,
@@ -11,7 +11,7 @@ ours on the converged (or finest available) reference where that has been run, a
 
 Every "ours" number is read from an output file (named in column ``our_source``); nothing is
 typed in. The tolerances are in ``data/paper_claims.csv`` and were fixed before reading our numbers
-(docs/paper-notes.md, "Claims scorecard").
+(docs/model.md, "Claims scorecard").
 """
 from __future__ import annotations
 
@@ -92,7 +92,7 @@ def _rest_ts(path) -> tuple[float, float]:
 
 
 def _rest_ts_mass99(path) -> float:
-    """t_s by the robust rule (99 % of the mass < 0.1 m/s; NaN for run files made before session 12)."""
+    """t_s by the robust rule (99 % of the mass < 0.1 m/s; NaN for run files written before the rule existed)."""
     with open_dataset(path, load=False) as ds:
         t = float(ds["time_to_rest_mass99"].values) if "time_to_rest_mass99" in ds else float("nan")
         return t / float(ds.attrs["t_c"])

@@ -52,7 +52,7 @@ MAIN_MEASURES = ("2d", "v99")
 REFERENCE_COLUMNS = ("case", "a", "theta_deg", "final_runout_norm", "flow_time", "flow_time_norm",
                      "front_definition", "provenance", "note", "dx", "time_to_rest",
                      *[f"final_runout_norm_{m}" for m in MEASURES], "flow_time_v99", "path", "reference_basis")
-#: default flow-time tolerance (m), the shared definition's default (docs/paper-notes.md)
+#: default flow-time tolerance (m), the shared definition's default (docs/model.md)
 FLOW_TIME_TOL = 1e-3
 
 
@@ -193,7 +193,7 @@ def reference_from_isph(runs: Iterable, tol: float = FLOW_TIME_TOL, label: str |
 def select_reference_runs(runs: Iterable, dx: float | None = None) -> list:
     """Per Table 5 case (matched by (a, θ)), the run at resolution ``dx`` (m), or the finest one.
 
-    The converged reference of the comparison (issue 13): until the convergence ladder names the
+    The converged reference of the comparison: until the convergence ladder names the
     converged dx, it is the finest-resolution run available for each case. A case with no run at the
     requested ``dx`` keeps its finest run, with a warning. Returns the selected paths/datasets.
     """
@@ -222,7 +222,7 @@ def select_reference_runs(runs: Iterable, dx: float | None = None) -> list:
     return chosen
 
 
-#: the ladder's tolerance (issue 11): a rung is converged when its runout changed by at most 5 % from
+#: the ladder's tolerance: a rung is converged when its runout changed by at most 5 % from
 #: the next coarser rung (README, "T22-A70 on the resolution ladder")
 CONVERGENCE_TOL = 0.05
 #: the runout measure the ladder checks: the 1 % volume front (``monitor.x_inf_front: v99``); the
@@ -387,7 +387,7 @@ def da_summary(run) -> dict:
     return out
 
 
-#: the A, B readings of the reading matrix (issue 13), by name
+#: the A, B readings of the reading matrix, by name
 #: plain labels (column ``reading_label`` of comparison.csv and the reading matrix, the summary, the figures)
 #: (computed: our regression, normalised, eq 36; paper normalised: Table 5 as printed; paper dimensional:
 #: Table 5 read as (hu)_C = A[x] + B in m²/s)
@@ -521,7 +521,7 @@ MATRIX_COLUMNS = ["case", "a", "reference", "reference_dx", "reference_basis", "
 
 
 def reading_matrix(table: pd.DataFrame, measures: Iterable[str] = MAIN_MEASURES) -> pd.DataFrame:
-    """The reading matrix of issue 13: per (case, reference, A/B reading, front measure), the runout and
+    """The reading matrix: per (case, reference, A/B reading, front measure), the runout and
     flow-time errors with deposition beside those without (the no-deposition run is shared by every
     reading) and whether deposition improved them (smaller |error|).
 

@@ -28,7 +28,7 @@ def _study_rows_isph(folder: Path, dx=None) -> pd.DataFrame:
                 row.update(final_runout_norm=r["final_runout_norm"], flow_time=r["flow_time"],
                            flow_time_norm=r["flow_time_norm"])
                 l0 = float(ds.attrs.get("L0", math.nan))
-                for k in ("front_5mm", "front_v99", "front_tail"):     # robust fronts (issue 11)
+                for k in ("front_5mm", "front_v99", "front_tail"):     # robust fronts
                     if f"final_{k}" in ds:
                         row[f"runout_{k}"] = (float(ds[f"final_{k}"].values) - l0) / l0
                 row["energy_max_excess"] = float(ds.attrs.get("energy_max_excess", math.nan))

@@ -20,6 +20,7 @@ from .._version import __version__
 from .da_vs_reference import PAPER_MAX_ERRORS, improvement, max_errors
 from .markdown import md_table, not_available, pct_mean, read_csv
 from .studies import section_convergence, section_sensitivity
+from ..verification_gate import FAIL, PASS, REPORTED, count, statuses
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -124,7 +125,7 @@ def section_compare(compare) -> str:
 
 
 def section_reading_matrix(matrix, maxima) -> str:
-    """Reading matrix (issue 13): {A, B readings} × {deposition, none} against every reference."""
+    """Reading matrix: {A, B readings} × {deposition, none} against every reference."""
     out = ["## Reading matrix: which A, B reading, which reference (Figs 15–16)\n"]
     mt, mx = read_csv(matrix), read_csv(maxima)
     if mt is None or mx is None:
@@ -246,14 +247,12 @@ def section_verification(paths) -> str:
         if df is None:
             out.append(not_available("verification table", p))
             continue
-        passed = df["passed"].astype(str).str.lower().isin(["true", "1", "yes"]) if "passed" in df else None
         head = f"### `{p}`"
-        if passed is not None:
-            head += f": {int(passed.sum())} of {len(df)} checks within tolerance"
-        out.append(head + "\n")
         show = df.copy()
-        if passed is not None:
-            show["passed"] = np.where(passed, "yes", "**NO**")
+        if "passed" in df:
+            head += f": {count(df).sentence()}"
+            show["passed"] = statuses(df).map({PASS: "yes", FAIL: "**NO**", REPORTED: "reported"})
+        out.append(head + "\n")
         out.append(md_table(show, {"check": ("check", ""), "quantity": ("quantity", ""), "value": ("value", ".4g"),
                                    "reference": ("reference", ".4g"), "error": ("error", ".3g"),
                                    "tolerance": ("tolerance", ".3g"), "passed": ("passed", ""), "note": ("note", "")}))
