@@ -151,7 +151,7 @@ def test_fig6_runs_the_case_yaml_with_and_without_slip(workdir):
     yaml_run = "granudep isph config/isph/fig6-quartz-a7.yaml --dx 0.004"
     (slip,) = [ln for ln in out.splitlines() if yaml_run in ln and "-o results/isph/fig6-quartz-a7.nc" in ln]
     (noslip,) = [ln for ln in out.splitlines() if yaml_run in ln and "-o results/isph/fig6-quartz-a7-noslip.nc" in ln]
-    assert "wall.slip" not in slip and "--set wall.slip=no_slip" in noslip
+    assert "--set wall.slip=navier" in slip and "--set wall.slip=no_slip" in noslip
     assert "--set case=fig6-quartz-a7-noslip" in noslip
     (fig,) = [ln for ln in out.splitlines() if "granudep figure fig6 " in ln]
     assert ("results/isph/fig6-quartz-a7.nc results/isph/fig6-quartz-a7-noslip.nc "

@@ -23,7 +23,8 @@ import numpy as np
 import pandas as pd
 
 from ..config import ConfigError
-from .common import CRITICAL_SPEED, add_inputs, case_of, classify, colours, load, need, new_figure, note, panel_label, register, scales
+from .common import (CRITICAL_SPEED, add_inputs, case_of, classify, colours, load, need, new_figure, note,
+                     panel_label, register, scales)
 from .isph2d import interface_profile, present, surface_profile
 
 #: the times the paper states (Section 4.1): the first and the last of its five
@@ -149,7 +150,8 @@ def fig6(runs, times=DEFAULT_TIMES, unit: str = "t_L0"):
                     f"them in s, which no laboratory column of this size reaches; docs/fig6.md)",
             "t_c": f"times read as t/t_c, t_c = sqrt(H0/g) = {sc['tc']:.3f} s (the paper writes them in s)",
             "s": "times in s, as the paper writes them"}[unit]
-    note(fig, f"{case_of(runs[0])}: a = {sc['H0'] / sc['L0']:g}, L0 = {sc['L0']:g} m, dx = {float(runs[0].attrs['dx']):g} m. "
+    dx0 = float(runs[0].attrs["dx"])
+    note(fig, f"{case_of(runs[0])}: a = {sc['H0'] / sc['L0']:g}, L0 = {sc['L0']:g} m, dx = {dx0:g} m. "
               f"Solid: F/D interface (top of the particles slower than {CRITICAL_SPEED:g} m/s under the flowing ones, "
               f"per 2 dx column); dashed: free surface (highest particle + dx/2). The paper states the first and last "
               f"times ({PAPER_TIMES[0]:g}, {PAPER_TIMES[1]:g}); the three between are evenly spaced (ours); {when}. "
