@@ -76,11 +76,12 @@ def test_default_times_are_the_papers_first_and_last_and_three_between():
 
 
 def test_final_runout_and_bed_label():
-    out = fig6.final_runout(planted_run())
+    from granudep.isph.analysis import bed_label, final_runout
+    out = final_runout(planted_run())
     assert out["front"] == 0.075 and out["runout_norm"] == pytest.approx((0.075 - 0.04) / 0.04)
     assert "1 %" in out["measure"] and out["time_to_rest"] == 0.15
-    assert "slip length 18 mm" in fig6.bed_label(planted_run("navier"))
-    assert fig6.bed_label(planted_run("no_slip")) == "no-slip bed"
+    assert "slip length 18 mm" in bed_label(planted_run("navier"))
+    assert bed_label(planted_run("no_slip")) == "no-slip bed"
 
 
 def test_cli_draws_both_runs(tmp_path):

@@ -25,6 +25,7 @@ import pandas as pd
 from ..config import ConfigError
 from .common import (CRITICAL_SPEED, add_inputs, case_of, classify, colours, load, need, new_figure, note,
                      panel_label, register, scales)
+from ..isph.analysis import bed_label, final_runout
 from .isph2d import interface_profile, present, surface_profile
 
 #: the times the paper states (Section 4.1): the first and the last of its five
@@ -78,30 +79,6 @@ def interfaces_at_times(run, times=DEFAULT_TIMES, unit: str = "t_L0", width: flo
         rows.append(pd.DataFrame({"t_request": float(t_req), "unit": unit, "time": time[i], "t_s": time[i] / tc,
                                   "beyond_end": beyond, "x": xc[ok], "interface": yi[ok], "surface": ys[ok]}))
     return pd.concat(rows, ignore_index=True)
-
-
-def final_runout(run) -> dict:
-    """The run's final front (1 % volume front ``final_front_v99`` where stored, else
-    ``final_front_position``), its runout ΔL/L0 = (x_f − L0)/L0, the run's status and time to rest."""
-    ds = load(run)
-    L0 = float(ds.attrs["L0"])
-    key = "final_front_v99" if "final_front_v99" in ds else "final_front_position"
-    xf = float(ds[key].values)
-    rest = float(ds["time_to_rest"].values) if "time_to_rest" in ds else float("nan")
-    return {"front": xf, "measure": "1 % volume front" if key == "final_front_v99" else "front",
-            "runout_norm": (xf - L0) / L0, "status": str(ds.attrs.get("status", "")), "time_to_rest": rest,
-            "t_end": float(ds["time"].values[-1])}
-
-
-def bed_label(ds) -> str:
-    """The bed condition of a run in words, from its ``wall_slip`` attribute."""
-    slip = str(ds.attrs.get("wall_slip", ""))
-    if slip in ("navier", "navier_overwrite"):
-        ell = float(ds.attrs.get("wall_slip_length", float("nan")))
-        return f"basal slip ({slip}, slip length {1e3 * ell:g} mm; the paper's)"
-    if slip == "no_slip":
-        return "no-slip bed"
-    return f"bed: {slip}" if slip else f"bed law not recorded ({case_of(ds)})"
 
 
 def fig6(runs, times=DEFAULT_TIMES, unit: str = "t_L0"):

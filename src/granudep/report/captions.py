@@ -109,7 +109,7 @@ def caption_numbers(results, convergence_dx=None) -> dict:
     fig6_runs = sorted((root / "isph").glob("fig6-*.nc"))  # the Fig 6 column's runs (workflow config fig6.runs)
     if fig6_runs:
         def fig6():
-            from ..figures.fig6 import bed_label, final_runout
+            from ..isph.analysis import bed_label, final_runout
             parts = []
             for f in fig6_runs:
                 with open_lazily(f) as ds:
