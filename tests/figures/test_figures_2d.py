@@ -128,6 +128,7 @@ def test_figA2_rms_planted(files):
 
 ALL = {
     "fig5": lambda f: [f["isph"]],
+    "fig6": lambda f: [f["isph"], f["isph16"]],
     "fig7": lambda f: [f["isph"], f["isph16"], f["sec"]],
     "figA3": lambda f: [f["isph"]],
     "fig8": lambda f: [f["sec"]],

@@ -17,7 +17,7 @@ from wfhelp import workdir as _workdir
 TABLE1 = ["T10-A35", "T16-A35", "T22-A35", "T16-A50", "T22-A50", "T10-A70", "T22-A70", "T10-A100",
           "T16-A100", "T22-A100", "T10-A120", "T16-A120", "T22-A120", "T22-A150"]
 TABLE5_GEOMETRIES = ["T22-A30", "T22-A45", "T22-A124"]
-FIGURES = ["fig5", "fig7", "fig8", "fig9", "fig10", "fig11", "fig12", "fig13", "fig15", "fig16",
+FIGURES = ["fig5", "fig6", "fig7", "fig8", "fig9", "fig10", "fig11", "fig12", "fig13", "fig15", "fig16",
            "fig17", "figA1", "figA2", "figA3"]
 
 SINGLE_TARGETS = [
@@ -111,8 +111,9 @@ def test_default_config_schedules_the_whole_paper(workdir):
     assert {f"figure_{f}" for f in FIGURES} <= set(jobs)
     # the extra studies are separate targets
     assert not any(r.startswith(("convergence", "sensitivity")) for r in jobs)
-    # paper resolution; every 2D run gets its dx
-    assert out.count("--dx 0.004") == n2d
+    # paper resolution; every 2D run gets its dx (the Table 1 / 5 runs and the two Fig 6 runs)
+    assert jobs["isph_fig6"] == 2
+    assert out.count("--dx 0.004") == n2d + 2
     # the chain is the default product: the DA runs with deposition use our computed A, B;
     # the reading matrix adds one run per case for Table 5 read as normalised and as dimensional
     for case in ("1D-A30", "1D-A45", "1D-A70", "1D-A124"):
@@ -141,6 +142,22 @@ def test_summary_is_given_every_figure_with_its_caption(workdir):
         assert figure_caption(name, workdir / "workflow" / "report"), f"{path}: no caption {name}.rst"
 
 
+def test_fig6_runs_the_case_yaml_with_and_without_slip(workdir):
+    """Fig 6 (quartz sand, a = 7, horizontal plane): the case YAML at the paper's dx, once with the
+    paper's slip (the YAML's bed) and once on a no-slip bed; the figure gets both and the times."""
+    rc, out, jobs = dry_run(workdir, "-j2", "results/figures/fig6_fd_interface_flat.png")
+    assert rc == 0, out
+    assert jobs["isph_fig6"] == 2 and jobs["figure_fig6"] == 1 and "isph_run" not in jobs
+    yaml_run = "granudep isph config/isph/fig6-quartz-a7.yaml --dx 0.004"
+    (slip,) = [ln for ln in out.splitlines() if yaml_run in ln and "-o results/isph/fig6-quartz-a7.nc" in ln]
+    (noslip,) = [ln for ln in out.splitlines() if yaml_run in ln and "-o results/isph/fig6-quartz-a7-noslip.nc" in ln]
+    assert "--set wall.slip=navier" in slip and "--set wall.slip=no_slip" in noslip
+    assert "--set case=fig6-quartz-a7-noslip" in noslip
+    (fig,) = [ln for ln in out.splitlines() if "granudep figure fig6 " in ln]
+    assert ("results/isph/fig6-quartz-a7.nc results/isph/fig6-quartz-a7-noslip.nc "
+            "--times 0.416 2.288 4.16 6.032 7.904 --time-unit t_L0") in fig
+
+
 def test_converged_reference_is_the_ladders_converged_rung(workdir):
     """The converged reference is chosen on the ladder's tolerance (compare.reference), the
     workflow's runs first (the fall-back), the ladder's files after --ladder."""
@@ -159,6 +176,7 @@ def test_ci_profile_runs_the_whole_chain_small(workdir):
     assert jobs["regress"] == jobs["reference"] == jobs["compare"] == jobs["summary"] == 1
     assert {f"figure_{f}" for f in FIGURES} <= set(jobs)
     assert "granudep isph T22-A70 --dx 0.01" in out and "granudep isph T16-A50 --dx 0.01" in out
+    assert jobs["isph_fig6"] == 2 and "granudep isph config/isph/fig6-quartz-a7.yaml --dx 0.0125" in out
     # the DA run with deposition takes A, B from the source the CI config names
     ci = yaml.safe_load((workdir / "config/ci.yaml").read_text())
     src = ci["da"]["ab_source"]
@@ -185,7 +203,7 @@ def test_slurm_profile_dry_runs(workdir):
     assert jobs["isph_run"] == len(TABLE1) + len(TABLE5_GEOMETRIES)
     # the profile's set-threads reach the 2D runs (without `cores` Snakemake scales them down to
     # the submitting node's core count) and SLURM is asked for as many CPUs
-    isph = re.findall(r"NUMBA_NUM_THREADS=(\d+) granudep isph ", out)
+    isph = re.findall(r"NUMBA_NUM_THREADS=(\d+) granudep isph (?!config/isph/fig6)", out)  # the Fig 6 runs: 1 thread
     assert len(isph) == jobs["isph_run"] and set(isph) == {"4"}
     assert out.count("cpus_per_task=4") >= jobs["isph_run"]
 

@@ -77,6 +77,17 @@ if _missing:
         "(map each DA case to the ISPH case of the same geometry, e.g. 1D-A70: T22-A70)"
     )
 REFERENCE_2D = {c: config["da"]["reference_2d"][c] for c in DA_CASES}
+
+# The paper's Fig 6 column (config fig6): its case YAML and its runs, name -> --set options.
+FIG6 = config.get("fig6", {})
+FIG6_RUNS = dict(FIG6.get("runs", {}))
+if FIG6_RUNS:
+    if not os.path.isfile(FIG6.get("config", "")):
+        raise WorkflowError(f"config fig6.config: file {FIG6.get('config')!r} not found (the Fig 6 case YAML, "
+                            "e.g. config/isph/fig6-quartz-a7.yaml)")
+    _clash = sorted(set(FIG6_RUNS) & (set(ISPH_CASES) | set(PATH_CASES)))
+    if _clash:
+        raise WorkflowError(f"config fig6.runs: {', '.join(_clash)} also a 2D case name (names become file names)")
 WM_CASES = [c for c in config["monitor"]["wm_cases"] if c in ISPH_CASES]
 
 
@@ -123,6 +134,7 @@ def fig_cases(name):
 # Paper figure -> output file (names after the paper's figure numbers).
 FIGURES = {
     "fig5": "fig5_free_surface.png",
+    "fig6": "fig6_fd_interface_flat.png",
     "fig7": "fig7_fd_interface.png",
     "fig8": "fig8_total_depth.png",
     "fig9": "fig9_deposit_depth.png",
@@ -149,6 +161,7 @@ ACTIVE_FIGURES = [
     for name in FIGURES
     if not (name in ("figA1", "figA2") and not WM_CASES)
     and not (name in ("fig5", "fig7", "fig8", "fig9", "fig10", "fig11", "figA3") and not fig_cases(name))
+    and not (name == "fig6" and not FIG6_RUNS)
 ]
 
 REGRESSION_OUTPUTS = [
@@ -161,6 +174,7 @@ REGRESSION_OUTPUTS = [
 
 ALL_TARGETS = (
     [f"{RESULTS}/isph/{c}.nc" for c in ISPH_CASES]
+    + [f"{RESULTS}/isph/{n}.nc" for n in FIG6_RUNS]
     + [f"{RESULTS}/sections/{c}.nc" for c in ISPH_CASES]
     + [f"{RESULTS}/wm/{c}.nc" for c in WM_CASES]
     + REGRESSION_OUTPUTS

@@ -16,6 +16,7 @@ _COEFFS = f"{RESULTS}/regression/coefficients.csv"
 # figure -> (report category, inputs in the order `granudep figure` reads them)
 FIGURE_INPUTS = {
     "fig5": ("2D ISPH", _isph(fig_cases("fig5"))),
+    "fig6": ("2D ISPH", [f"{RESULTS}/isph/{n}.nc" for n in FIG6_RUNS]),
     "fig7": ("2D ISPH", _isph(fig_cases("fig7")) + _sections(fig_cases("fig7"))),
     "fig8": ("Monitoring sections", _sections(fig_cases("fig8"))),
     "fig9": ("Monitoring sections", _sections(fig_cases("fig9")) + [_CRITICAL]),
@@ -41,6 +42,12 @@ FIGURE_INPUTS = {
     "figA3": ("Appendix", _isph(fig_cases("figA3")) + _sections(fig_cases("figA3"))),
 }
 
+# figure -> options of `granudep figure NAME` beyond its inputs (a leading space; "" for none)
+FIGURE_ARGS = {
+    "fig6": (" --times " + " ".join(f"{t:g}" for t in FIG6.get("times", [])) if FIG6.get("times") else "")
+    + (f" --time-unit {FIG6['time_unit']}" if FIG6.get("time_unit") else ""),
+}
+
 for _name in ACTIVE_FIGURES:
     _category, _inputs = FIGURE_INPUTS[_name]
 
@@ -53,6 +60,7 @@ for _name in ACTIVE_FIGURES:
             report(figure_path(_name), caption=f"../report/{_name}.rst", category=_category),
         params:
             name=_name,
+            args=FIGURE_ARGS.get(_name, ""),
         log:
             f"{LOGS}/figures/{_name}.log",
         benchmark:
@@ -62,7 +70,7 @@ for _name in ACTIVE_FIGURES:
             runtime=10,
             mem_mb=2000,
         shell:
-            "MPLBACKEND=Agg granudep figure {params.name} -o {output} {input} > {log} 2>&1"
+            "MPLBACKEND=Agg granudep figure {params.name} -o {output} {input}{params.args} > {log} 2>&1"
 
 
 # Figures beyond the paper's numbering: the reading matrix and the eq-36 residuals.

@@ -1,8 +1,10 @@
 # 2D ISPH with the mu(I) rheology (Sections 2.1-2.2): every Table 1 case, the Table 5 geometries
-# at 22 deg, and any user case. Output: results/isph/{case}.nc (particles x time).
+# at 22 deg, any user case, and the Fig 6 column's runs. Output: results/isph/{case}.nc (particles x time).
 # A run cancelled by SIGTERM (Snakemake, SLURM) writes a checkpoint next to its output
 # (.{case}.ckpt); the rerun continues from it (--restart auto), bit-identically.
 
+
+import re
 
 from granudep.workflow_check import user_case_mapping
 
@@ -44,3 +46,35 @@ rule isph_run:
     shell:
         "NUMBA_NUM_THREADS={threads} granudep isph {params.source} --dx {params.dx} {params.t_end} {params.set}"
         " --restart auto -o {output} > {log} 2>&1"
+
+
+if FIG6_RUNS:
+
+    # results/isph/{name}.nc of a Fig 6 run is this rule's, not isph_run's (whose {case} matches any name)
+    ruleorder: isph_fig6 > isph_run
+
+    rule isph_fig6:
+        """The paper's Fig 6 column (config fig6): its case YAML at fig6.dx, with the scheme options of
+        every 2D run (isph.set) and the run's own (fig6.runs, e.g. wall.slip: no_slip)."""
+        input:
+            warm=WARM,
+            config=FIG6["config"],
+        output:
+            f"{RESULTS}/isph/{{fig6run}}.nc",
+        wildcard_constraints:
+            fig6run="|".join(re.escape(n) for n in FIG6_RUNS),
+        params:
+            dx=FIG6.get("dx", config["isph"]["dx"]),
+            t_end=lambda wc: f"--t-end {config['isph']['t_end']}" if config["isph"].get("t_end") else "",
+            set=lambda wc: " ".join(o for o in (isph_set_options(), set_options(FIG6_RUNS[wc.fig6run])) if o),
+        log:
+            f"{LOGS}/isph/{{fig6run}}.log",
+        benchmark:
+            f"{BENCH}/isph/{{fig6run}}.tsv"
+        threads: 1
+        resources:
+            runtime=60,
+            mem_mb=2000,
+        shell:
+            "NUMBA_NUM_THREADS={threads} granudep isph {input.config} --dx {params.dx} {params.t_end} {params.set}"
+            " --set case={wildcards.fig6run} --restart auto -o {output} > {log} 2>&1"

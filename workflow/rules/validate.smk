@@ -42,6 +42,12 @@ def _validation_jobs():
                 "numerics.t_end": ("isph", "t_end"), **_isph_set_keys(), **_geometry_keys(case)}
         jobs.append(isph_job(f"isph run {case!r}", _isph_source(case), _isph_case_key(case), keys,
                              dx=isph_dx(case), t_end=_isph_t_end(), **config["isph"].get("set", {})))
+    for name, opts in FIG6_RUNS.items():  # rule isph_fig6
+        keys = {"numerics.dx": ("fig6", "dx"), "numerics.t_end": ("isph", "t_end"), **_isph_set_keys(),
+                **{k: ("fig6", "runs", name, k) for k in opts}}
+        jobs.append(isph_job(f"fig6 isph run {name!r}", FIG6["config"], ("fig6", "runs", name), keys,
+                             dx=FIG6.get("dx", config["isph"]["dx"]), t_end=_isph_t_end(),
+                             **{**config["isph"].get("set", {}), **opts, "case": name}))
     wkeys = {"monitor.width_factor": ("monitor", "width_factor")}
     jobs.append(monitor_job("monitor", ("monitor", "width_factor"), wkeys,
                             width_factor=config["monitor"]["width_factor"]))  # rule monitor

@@ -1,4 +1,5 @@
-"""Post-processing of ISPH runs: the initial failure plane of the column (Section 4.2.2).
+"""Post-processing of ISPH runs: the initial failure plane of the column (Section 4.2.2); a run's
+final runout and bed in words (Fig 6).
 
 One definition, used by the verification table (``granudep verify isph``), Fig 5 and its caption
 and the claims scorecard. The paper's failure plane is the Rankine surface that bounds "the initial
@@ -21,6 +22,8 @@ from ..cases import characteristic_time
 
 #: the paper's flow/deposit speed threshold (Section 2.2), m/s
 CRITICAL_SPEED = 0.1
+#: the slip length of the paper's basal slip, m (the authors' published value; docs/bed-law.md)
+PAPER_SLIP_LENGTH = 0.018
 
 
 def failure_plane_angle(ds: xr.Dataset, t_norm: float = 1.0, v_crit: float = CRITICAL_SPEED) -> dict:
@@ -98,3 +101,28 @@ def time_to_rest_mass_share(time: np.ndarray, u: np.ndarray, v: np.ndarray, shar
         else:
             rest_since = math.nan
     return math.nan
+
+
+def final_runout(ds: xr.Dataset) -> dict:
+    """A run's final front (1 % volume front ``final_front_v99`` where stored, else
+    ``final_front_position``), its runout ΔL/L0 = (x_f − L0)/L0, its status, time to rest and end
+    (Fig 6 and its report caption)."""
+    L0 = float(ds.attrs["L0"])
+    key = "final_front_v99" if "final_front_v99" in ds else "final_front_position"
+    xf = float(ds[key].values)
+    rest = float(ds["time_to_rest"].values) if "time_to_rest" in ds else float("nan")
+    return {"front": xf, "measure": "1 % volume front" if key == "final_front_v99" else "front",
+            "runout_norm": (xf - L0) / L0, "status": str(ds.attrs.get("status", "")), "time_to_rest": rest,
+            "t_end": float(ds["time"].values[-1])}
+
+
+def bed_label(ds: xr.Dataset) -> str:
+    """The bed condition of a run in words, from its ``wall_slip`` attribute."""
+    slip = str(ds.attrs.get("wall_slip", ""))
+    if slip in ("navier", "navier_overwrite"):
+        ell = float(ds.attrs.get("wall_slip_length", float("nan")))
+        whose = "; the paper's" if slip == "navier" and math.isclose(ell, PAPER_SLIP_LENGTH) else ""
+        return f"basal slip ({slip}, slip length {1e3 * ell:g} mm{whose})"
+    if slip == "no_slip":
+        return "no-slip bed"
+    return f"bed: {slip}" if slip else f"bed law not recorded ({ds.attrs.get('case', '?')})"

@@ -106,6 +106,22 @@ def caption_numbers(results, convergence_dx=None) -> dict:
         guard("fig5", fig5, "isph/T22-A70.nc")
     else:
         nums["fig5"] = missing("isph/T22-A70.nc")
+    fig6_runs = sorted((root / "isph").glob("fig6-*.nc"))  # the Fig 6 column's runs (workflow config fig6.runs)
+    if fig6_runs:
+        def fig6():
+            from ..isph.analysis import bed_label, final_runout
+            parts = []
+            for f in fig6_runs:
+                with open_lazily(f) as ds:
+                    out, bed, dx = final_runout(ds), bed_label(ds), float(ds.attrs["dx"])
+                rest = (f"at rest at t = {out['time_to_rest']:.2f} s" if np.isfinite(out["time_to_rest"])
+                        else f"not at rest at t = {out['t_end']:.2f} s")
+                parts.append(f"{bed}: final runout (x_f − L0)/L0 = {out['runout_norm']:.2f} (x_f = {out['front']:.3f} m, "
+                             f"{out['measure']}), {rest}, dx = {1e3 * dx:g} mm")
+            return "; ".join(parts)
+        guard("fig6", fig6, "isph/fig6-*.nc")
+    else:
+        nums["fig6"] = missing("isph/fig6-*.nc")
     secs = [(root / "sections" / f"{c}.nc", t) for c, t in (("T16-A50", 6.0), ("T22-A70", 9.0))]
     if all(p.is_file() for p, _ in secs):
         guard("fig8", lambda: "; ".join(_late_depth(p, t) for p, t in secs), "sections")
