@@ -107,9 +107,11 @@ def test_isph_slope_steeper_than_friction_is_refused():
         with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < wall.phi_basal_deg = 20.0"):
             load_config({"case": "steep", "geometry": {"theta_deg": 22.0},
                          "wall": {"phi_basal_deg": 20.0, "slip": law}})
-    # the no-slip default does not use phi_B: the material's friction angle is the limit
+    # the Navier default and the no-slip bed do not use phi_B: the material's friction angle is the limit
     assert load_config({"case": "steep", "geometry": {"theta_deg": 22.0},
-                        "wall": {"phi_basal_deg": 20.0}}).wall.slip == "no_slip"
+                        "wall": {"phi_basal_deg": 20.0}}).wall.slip == "navier"
+    assert load_config({"case": "steep", "geometry": {"theta_deg": 22.0},
+                        "wall": {"phi_basal_deg": 20.0, "slip": "no_slip"}}).wall.slip == "no_slip"
 
 
 def test_da_slope_steeper_than_basal_friction_is_refused():
