@@ -565,16 +565,17 @@ class IsphSolver:
         sx, sy = shifting.shifting(nf, geo.gcx, geo.gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
                                    ncx, ncy)
         eb.projection += pressure_work(self.m, u_old, v_old, us, vs, self.u, self.v)
-        if self.slip == walls.SLIP_NAVIER_OVERWRITE and self.grad is not None:
+        overwrite = self.slip == walls.SLIP_NAVIER_OVERWRITE and self.grad is not None
+        if overwrite:
             # the authors' slip overwrites the first layer's new velocity: its kinetic-energy change
-            # is booked as the wall's work (dissipated when positive)
+            # is booked as the wall's work (dissipated when positive, created when negative)
             ke = kinetic_energy(self.m, self.u, self.v)
             walls.navier_overwrite(nb, nf, self.grad, self.u, self.v, self.wall_surface,
                                    walls.OVERWRITE_BAND * self.dx, c.wall.slip_length)
-            ke_new = kinetic_energy(self.m, self.u, self.v)
+        ke_new = kinetic_energy(self.m, self.u, self.v)
+        if overwrite:
             eb.wall_friction += ke - ke_new
             eb.dissipated += ke - ke_new
-        ke_new = kinetic_energy(self.m, self.u, self.v)
         eb.shifting += -self.m * (self.gx * float(np.sum(sx)) + self.gy * float(np.sum(sy)))
         self.x[:nf] += dt * self.u + sx
         self.y[:nf] += dt * self.v + sy
