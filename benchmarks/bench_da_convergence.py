@@ -17,9 +17,9 @@ runs and mix its own tolerance into the convergence). Wall and CPU seconds are a
         [--n-max 4000] [--csv docs/data/da_convergence.csv] [--figure docs/figures/da_convergence.png]
         [--set deposition.own_deposit=include ...]
 
-W_min/dE (runs without deposition): the Coulomb friction work can be no less than μ g Σ V Δx
-(horizontal displacements), so W_min / (E_0 − E_end) ≤ 1 unless the scheme created energy; a
-value above 1 flags a run that went farther than its energy allows.
+W_min/dE and the largest energy rise between outputs (runs without deposition; ``granudep.da.energy``):
+the Coulomb friction work can be no less than μ g Σ V Δx (horizontal displacements), so
+W_min / (E_0 − E_end) ≤ 1 unless the scheme created energy, and E never rises between outputs.
 
 docs/data/da_convergence.csv was made with ``--cases path --n-max 8000`` then ``--cases 1D-A70
 --n-max 4000`` (docs/da-engineer-scale.md has the tables; ~20 CPU-min, most of it N = 8000).
@@ -73,36 +73,14 @@ def one_run(cfg: dict, deposition: bool, x_inf: float | None):
     t0, c0 = time.perf_counter(), time.process_time()
     ds = run_da(cfg, deposition=deposition)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    from granudep.da.energy import energy_report
     front = float(ds.front_position[-1])  # station s on a path (deposition.x_inf is a station), x otherwise
-    mu = math.tan(math.radians(float(ds.attrs.get("phi_basal_deg", 25.5))))
-    ratio = energy_ratio(ds, mu) if not deposition else float("nan")
-    return {"energy_ratio": ratio, "runout": float(ds.final_runout), "flow_time": float(ds.flow_time), "steps": int(ds.attrs["n_steps"]),
+    en = energy_report(ds)
+    return {"energy_ratio": en["coulomb_ratio"], "energy_rise": en["largest_rise"], "n_rises": en["n_rises"],
+            "runout": float(ds.final_runout), "flow_time": float(ds.flow_time), "steps": int(ds.attrs["n_steps"]),
             "wall_s": wall, "cpu_s": cpu, "at_rest": int(ds.attrs["at_rest"]), "front": front,
             "x_inf_user": front, "max_speed": float(abs(ds.u).max()),
             "L_s_final": float(ds.smoothing_length[-1])}
-
-
-def energy_ratio(ds, mu: float) -> float:
-    """Coulomb energy check of a run without deposition: the friction work can be no less than
-    μ g Σ V_i Δx_i (Δx horizontal; equality for a block sliding forward only, more with the
-    centripetal normal stress or backward motion), so W_min / (E_0 − E_end) ≤ 1 unless the scheme
-    created energy. E = Σ V (u²/2 + g z + g cosθ h/2); z, x from the bed (a path) or the slope."""
-    import numpy as np
-    V = ds.volume.values
-    u = ds.u.values
-    h = ds.h.values
-    if "x_particle" in ds:
-        s, zb, xb = ds.s.values, ds.z.values, ds.x.values
-        xp = ds.x_particle.values
-        th = np.radians(np.interp(xp, s, ds.bed_slope.values))
-        z, xh = np.interp(xp, s, zb), np.interp(xp, s, xb)
-    else:
-        th = np.full(V.shape, math.radians(float(ds.attrs["theta_deg"])))
-        xp = ds.x.values if ds.x.dims == ("time", "particle") else ds.x_particle.values
-        z, xh = -xp * np.sin(th), xp * np.cos(th)
-    E = (V * (0.5 * u ** 2 + 9.81 * z + 9.81 * np.cos(th) * h / 2.0)).sum(axis=1)
-    w_min = 9.81 * mu * float((V[-1] * (xh[-1] - xh[0])).sum())
-    return w_min / float(E[0] - E[-1])
 
 
 def ladder(n_min: int, n_max: int) -> list[int]:
@@ -182,7 +160,7 @@ def main() -> None:
                     rows.append(r)
                     print(f"  {case} {'dep' if dep else 'nodep'} N = {n}: runout {r['runout']:.4f} m, flow time "
                           f"{r['flow_time']:.3f} s, {r['steps']} steps, wall {r['wall_s']:.2f} s, CPU {r['cpu_s']:.2f} s, "
-                          f"energy ratio {r['energy_ratio']:.4f}, max |u| {r['max_speed']:.2f} m/s"
+                          f"energy ratio {r['energy_ratio']:.4f}, largest rise {r['energy_rise']:.2e} ({r['n_rises']} rises), max |u| {r['max_speed']:.2f} m/s"
                           f"{'' if r['at_rest'] else ' (NOT at rest)'}", flush=True)
                 if not dep and args.x_inf is None:
                     x_inf = rows[-1]["x_inf_user"]
@@ -221,7 +199,7 @@ def main() -> None:
     if args.csv:
         args.csv.parent.mkdir(parents=True, exist_ok=True)
         keys = ["variant", "case", "deposition", "n", "runout", "change_prev", "flow_time", "steps", "wall_s",
-                "cpu_s", "at_rest", "energy_ratio", "max_speed", "L_s_final", "x_inf", "converged_n", "near_finest_n"]
+                "cpu_s", "at_rest", "energy_ratio", "energy_rise", "n_rises", "max_speed", "L_s_final", "x_inf", "converged_n", "near_finest_n"]
         new = not args.csv.exists()
         with args.csv.open("a", newline="") as f:
             wr = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")

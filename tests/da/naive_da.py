@@ -56,6 +56,25 @@ def fields(x, u, V, L, qc, wall):
     return h, nd, dh, du, xsph
 
 
+def symmetric_pressure(x, V, L, qc, wall, k):
+    """−Σ_j V_j ½(k_i + k_j) ∇W_ij / max(Σ_j V_j/h_j W_ij, ½) and the |∇W|-weighted mean of ½(k_i + k_j),
+    dense, with the mirror images (which carry their particle's k)."""
+    xs, _, Vs, own = with_ghosts(x, np.zeros_like(x), V, L, qc, wall)
+    r = x[:, None] - xs[None, :]
+    W, gW = kernel(r, L, qc)
+    full = (Vs > 0.0)[None, :]
+    h = np.sum(np.where(full, Vs * W, 0.0), axis=1)
+    hs = h[own]
+    shep = np.sum(np.where(full & (hs > 0.0)[None, :], Vs / np.where(hs > 0, hs, 1.0) * W, 0.0), axis=1)
+    kij = 0.5 * (k[:, None] + k[own][None, :])
+    kdA = -np.sum(np.where(full, Vs * kij * gW, 0.0), axis=1) / np.maximum(shep, 0.5)
+    a = np.where(full, Vs * np.abs(gW), 0.0)
+    ws = a.sum(axis=1)
+    kbar = np.where(ws > 0, (a * kij).sum(axis=1) / np.where(ws > 0, ws, 1.0), k)
+    kdA[V <= 0.0] = 0.0
+    return kdA, kbar
+
+
 def deposit_slope(x, V, depb, dxg, L, qc, wall):
     """∂h_D/∂x at the particles from the cell volumes (/width) at the cell centres, mirrored at a wall."""
     c = (np.arange(depb.size) + 0.5) * dxg
@@ -84,6 +103,10 @@ def stage(x, u, V, L, tab, p, depb, dxg):
     N = np.maximum(p.g * b[T_COS] + (b[T_KAPPA] if p.centripetal else 0.0) * u * u, 0.0)
     fc = p.tan_phi_basal * N
     k = np.where(du >= 0.0, b[T_KACT], b[T_KPASS])
+    if p.k_symmetric:   # pair form: k-weighted area gradient with ½(k_i + k_j) inside the sum
+        kdA, kbar = symmetric_pressure(x, V, L, p.kernel_support, p.back_wall, k)
+        dh = (kdA - kbar * h * b[T_DWIDTH]) / b[T_WIDTH]
+        k = np.ones_like(k)
     gb = (deposit_slope(x, V, depb, dxg, L, p.kernel_support, p.back_wall) if p.deposition and p.deposit_as_bed
           else np.zeros_like(x))
     a = gs - k * gc * dh - gc * gb

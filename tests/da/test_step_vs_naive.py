@@ -61,10 +61,11 @@ def _constant_case(deposition):
     return cfg, p, constant_bed_table(cfg.theta, phys)
 
 
-@pytest.mark.parametrize("deposition", [False, True])
-def test_constant_slope_step_matches_naive(deposition):
+@pytest.mark.parametrize("deposition,symmetric", [(False, False), (True, False), (False, True), (True, True)])
+def test_constant_slope_step_matches_naive(deposition, symmetric):
     rng = np.random.default_rng(7)
     cfg, p, tab = _constant_case(deposition)
+    p = p._replace(k_symmetric=symmetric)
     x, u, V, V0, nd = _state(rng, dead=(5,))
     ng = 240
     dep = np.zeros(ng)
@@ -84,8 +85,9 @@ def test_constant_slope_step_matches_naive(deposition):
     assert F[F_U, 5] == 0.0 and xk[5] == x[5]             # an emptied particle stays put
 
 
-@pytest.mark.parametrize("max_tan", [math.inf, math.tan(math.radians(25.5))])
-def test_path_step_matches_naive_with_width_curvature_and_relative_dt(max_tan):
+@pytest.mark.parametrize("max_tan,symmetric", [(math.inf, False), (math.tan(math.radians(25.5)), False),
+                                                (math.tan(math.radians(25.5)), True)])
+def test_path_step_matches_naive_with_width_curvature_and_relative_dt(max_tan, symmetric):
     """A bed table with varying slope, curvature and width (the path model's stage functions);
     deposition on every slope, or none where the bed (30° -> 12°) is steeper than φ_B = 25.5°."""
     rng = np.random.default_rng(11)
@@ -101,7 +103,7 @@ def test_path_step_matches_naive_with_width_curvature_and_relative_dt(max_tan):
     tab[T_KACT], tab[T_KPASS] = 0.9, 2.0
     tab[T_A], tab[T_B] = -0.02 - 0.05 * s, 2.0
     p = p0._replace(origin=0.01, ds=ds, centripetal=True, has_width=True, dt_relative=True, geometry_step=0.004,
-                    x_min=0.0, deposit_max_tan=max_tan)
+                    x_min=0.0, deposit_max_tan=max_tan, k_symmetric=symmetric)
     x, u, V, V0, nd = _state(rng)
     ng = 240
     dep = np.zeros(ng)

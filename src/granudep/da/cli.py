@@ -27,6 +27,8 @@ def _run(args) -> int:
     deposition = not args.no_deposition
     cfg = resolve(args.case, deposition=deposition, **overrides)  # ConfigError before any work
     apply_threads(args.threads)
+    if args.convergence:
+        return _convergence(args, cfg, deposition)
     out = Path(args.output or default_path(cfg, deposition))
     check_output(out)  # a read-only folder or a non-.nc name costs nothing
     ckpt = checkpoint_path(args, out)
@@ -73,6 +75,23 @@ def _run(args) -> int:
     return 0
 
 
+def _convergence(args, cfg, deposition) -> int:
+    """--convergence: the doubling study N_MIN, 2 N_MIN, … N_MAX of this case; a table on stdout and a CSV."""
+    from .convergence import doubling_study, format_table
+    out = Path(args.output or f"results/da/{cfg.case}_{'deposition' if deposition else 'nodeposition'}"
+                              f"_convergence.csv")
+    if out.suffix != ".csv":
+        out = out.with_suffix(".csv")
+    df = doubling_study(cfg, deposition, args.n_min, args.n_max or max(args.n_min, 4 * cfg.numerics.n_particles))
+    print(f"{cfg.case} ({'with' if deposition else 'without'} deposition), earth pressure "
+          f"{cfg.numerics.earth_pressure} / switch {cfg.numerics.earth_pressure_switch}: doubling study")
+    print(format_table(df))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    df.to_csv(out, index=False)
+    print(f"written {out}")
+    return 0
+
+
 def _path_figure(args) -> int:
     from ..config import ConfigError
     from ..figures.path import path_figure
@@ -88,7 +107,9 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "da", help="run the 1D depth-averaged SPH model (Table 5 case or YAML), with or without deposition",
         description="Run the 1D DA SPH model of Sections 2.3-2.4; prints progress and, at the end, the final "
-                    "runout dL/L0 (from the gate) and the flow time with the front definition.")
+                    "runout dL/L0 (from the gate) with the particle number N it was computed with and the flow "
+                    "time with the front definition. A runout is an answer only at an N where it has converged: "
+                    "--convergence runs the doubling study that shows from which N it changes < 1 %% per doubling.")
     p.add_argument("case", metavar="CASE|CONFIG.yaml", help="1D-A30, 1D-A45, 1D-A70, 1D-A124 or a YAML config "
                    "(with geometry.path: a run along a slope profile, e.g. config/da/example_path.yaml)")
     p.add_argument("--no-deposition", action="store_true", help="switch the deposition source term off")
@@ -102,6 +123,13 @@ def register(subparsers) -> None:
     p.add_argument("--x-inf-mode", choices=["self-consistent", "no-deposition", "user"], help="how x_inf in [x] is set")
     p.add_argument("--x-inf", type=float, metavar="X",
                    help="x_inf in m from the back wall (implies --x-inf-mode user)")
+    p.add_argument("--convergence", action="store_true",
+                   help="run the doubling study instead of one run: N = --n-min, 2 N, ... up to --n-max (default 4x "
+                        "numerics.n_particles), print runout, change per doubling (converged: < 1 %% from some N "
+                        "on), flow time, CPU s and the energy checks (W_min/dE <= 1, rises of E) per N, and write "
+                        "them to a CSV (-o, default results/da/{case}_{deposition|nodeposition}_convergence.csv)")
+    p.add_argument("--n-min", type=int, default=250, metavar="N", help="first N of --convergence (default 250)")
+    p.add_argument("--n-max", type=int, metavar="N", help="last N of --convergence")
     add_checkpoint_args(p)
     p.add_argument("--progress", choices=["auto", "log", "bar", "off"], default="log",
                    help="progress: plain log lines (default), a tqdm bar, auto (bar in a terminal) or off")

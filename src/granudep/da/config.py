@@ -59,6 +59,16 @@ class Numerics:
     xsph_delta: float = param(0.05, ge=0.0, le=0.5, doc="δ of the XSPH correction eq 33")
     earth_pressure: Literal["paper", "savage_hutter", "one"] = param(
         "paper", doc="k: eqs 8-9 with θ (paper), with φ_B (Savage-Hutter), or k = 1")
+    earth_pressure_switch: Literal["particle", "symmetric"] = param(
+        "particle", doc="how the active/passive k of eqs 8-9 enters the depth-gradient sum. particle: "
+                        "-k_i g cosθ ∂h/∂s_i with k_i from the sign of the particle's own ∂u/∂s (eq 11 read "
+                        "literally; the pair forces of two particles in different states do not balance, and on "
+                        "the 1 km path above N = 2000 a pile nearly at rest gains energy). symmetric: "
+                        "g cosθ Σ_j V_j ½(k_i + k_j) ∇W_ij (the SPH form of -(1/h) ∂(k g cosθ h²/2)/∂s), "
+                        "pair forces equal and opposite; with k_i from the sign of ∂u/∂s_i (= the sign of -dh_i/dt) "
+                        "the semi-discrete energy can only fall when k_a <= 1 <= k_p, but piles never reach "
+                        "numerics.u_rest (a jitter of ~1e-2 m/s stays; docs/da-engineer-scale.md). No effect "
+                        "with earth_pressure 'one'")
     basal_friction: bool = param(True, doc="Coulomb basal friction tan φ_B (off for the Ritter check)")
     t_end: float = param(20.0, gt=0.0, unit="s", doc="hard stop if the flow has not come to rest")
     u_rest: float = param(1e-4, gt=0.0, unit="m s-1", doc="at rest when every |u| is below this")

@@ -104,7 +104,7 @@ def to_dataset(cfg, rec, *, deposition: bool, physics, A=float("nan"), B=float("
         # escapes past it runs out freely, which makes F(x_inf) jump (docs/paper-notes.md, "x_inf fall-back")
         "x_norm_zero_critical": float(-B / A) if deposition and A != 0 and math.isfinite(A) else float("nan"),
         "coefficient_units": cfg.deposition.coefficient_units, "p0": cfg.p0, "t_c": t_c,
-        "k_active": physics.k_active, "k_passive": physics.k_passive, "earth_pressure": num.earth_pressure,
+        "k_active": physics.k_active, "k_passive": physics.k_passive, "earth_pressure": num.earth_pressure, "earth_pressure_switch": num.earth_pressure_switch,
         "phi_internal_deg": cfg.material.phi_internal_deg, "phi_basal_deg": cfg.material.phi_basal_deg,
         "d": cfg.material.d, "n_particles": num.n_particles, "smoothing_B": num.smoothing_B, "cfl": num.cfl,
         "xsph_delta": num.xsph_delta, "kernel_support": num.kernel_support, "dx_grid": dxg,
@@ -124,6 +124,7 @@ def summary_line(ds: xr.Dataset) -> str:
     tf = float(ds.flow_time)
     tf_txt = f"{tf:.3f} s (t/t_c = {float(ds.flow_time_norm):.3f})" if math.isfinite(tf) else "n/a (not at rest)"
     return (f"{ds.attrs['case']} ({'with' if ds.attrs['deposition'] else 'without'} deposition): "
-            f"final runout dL/L0 = {float(ds.final_runout_norm):.4f} (dL = {float(ds.final_runout):.4f} m), "
+            f"final runout dL/L0 = {float(ds.final_runout_norm):.4f} (dL = {float(ds.final_runout):.4f} m, "
+            f"N = {int(ds.attrs.get('n_particles', ds.sizes.get('particle', 0)))}), "
             f"flow time {tf_txt}; front = last cell with h + h_D >= {ds.attrs['front_depth_threshold'] * 1e3:.2f} mm, "
             f"rest = front moves < {ds.attrs['flow_time_tolerance'] * 1e3:.1f} mm")

@@ -300,7 +300,7 @@ def to_path_dataset(cfg, setup: PathSetup, rec, *, deposition: bool, ab_source: 
         "x_inf": float(x_inf), "x_inf_mode": mode, "x_inf_iterations": int(iters), "x_inf_residual": float(resid),
         "A": float(np.mean(rec.A)) if deposition else float("nan"), "B": float(np.mean(rec.B)) if deposition else
         float("nan"), "ab_source": ab_source, "coefficient_units": cfg.deposition.coefficient_units,
-        "p0": momentum_scale(setup.H0, setup.theta_release), "t_c": t_c, "earth_pressure": num.earth_pressure,
+        "p0": momentum_scale(setup.H0, setup.theta_release), "t_c": t_c, "earth_pressure": num.earth_pressure, "earth_pressure_switch": num.earth_pressure_switch,
         "phi_internal_deg": cfg.material.phi_internal_deg, "phi_basal_deg": cfg.material.phi_basal_deg,
         "d": cfg.material.d, "n_particles": num.n_particles, "smoothing_B": num.smoothing_B, "cfl": num.cfl,
         "xsph_delta": num.xsph_delta, "kernel_support": num.kernel_support, "dx_grid": dxg,

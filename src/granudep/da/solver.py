@@ -94,7 +94,8 @@ def step_params(cfg, phys: Physics) -> StepParams:
         origin=0.0, ds=float(cfg.geometry.domain_end), centripetal=False, has_width=False, dt_relative=False,
         geometry_step=math.inf, front_threshold=float(cfg.front_threshold),
         own_deposit=dep.own_deposit == "include",
-        deposit_max_tan=math.tan(math.radians(mat.phi_basal_deg)) if dep.steep_bed == "no_deposit" else math.inf)
+        deposit_max_tan=math.tan(math.radians(mat.phi_basal_deg)) if dep.steep_bed == "no_deposit" else math.inf,
+        k_symmetric=num.earth_pressure_switch == "symmetric" and num.earth_pressure != "one")
 
 
 def constant_bed_table(theta: float, phys: Physics) -> np.ndarray:

@@ -145,6 +145,71 @@ def evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h, nd, dhdx, dud
     return E
 
 
+@njit(cache=True, fastmath=FASTMATH)
+def symmetric_pressure_pass(xe, Ve, he, ke, m, n, lo, hi, L, norm, qc, E, kdh, kbar):
+    """The earth-pressure gradient in symmetric (pair) form: kdh_i = −Σ_j V_j ½(k_i + k_j) ∇W_ij / S_i
+    with S_i = max(Σ_j V_j/h_j W_ij, SHEPARD_FLOOR), i.e. ∂h/∂x of ``gradient_pass`` (eqs 21–22) with
+    the pair's mean k inside the sum, and kbar_i = Σ V_j ½(k_i + k_j) |∇W_ij| / Σ V_j |∇W_ij| (the k of
+    the particle's own width term; k_i for an isolated particle).
+
+    ½(k_i + k_j) is symmetric, so (with S ≈ 1 inside the flow) the pair forces are equal and opposite;
+    it is the SPH form of −(1/h) ∂(k g cosθ h²/2)/∂x with P/h² = k g cosθ/2. With S = 1 and a fixed
+    L_s the rate of E = Σ V (u²/2 + g z + g cosθ h/2) it gives is −(g cosθ/2) Σ_i V_i (k_i − 1) dh_i/dt,
+    never positive when k_i ≥ 1 where dh_i/dt > 0 (∂u/∂x_i < 0: k_p) and k_i ≤ 1 where it is < 0 (k_a).
+    ke: k of the extended particles (ghosts first); E: e^{−q²} of every pair from ``depth_pass``."""
+    qc2 = qc * qc
+    ec = math.exp(-qc2)
+    g2 = 2.0 * norm / (L * L)
+    p = 0
+    for i in range(n):
+        k = m + i
+        if Ve[k] <= 0.0:
+            kdh[i] = 0.0
+            kbar[i] = ke[k]
+            p += hi[i] - lo[i]
+            continue
+        xi = xe[k]
+        ki = ke[k]
+        shep = 0.0
+        gh = 0.0
+        wsum = 0.0
+        ksum = 0.0
+        for j in range(lo[i], hi[i]):
+            e = E[p]
+            p += 1
+            vj = Ve[j]
+            if vj <= 0.0 or e == 0.0:
+                continue
+            r = xi - xe[j]
+            q2 = (r / L) ** 2
+            w = gauss_w_e(e, q2, norm, qc2, ec)
+            gw = gauss_gradw_e(g2, r, e, ec)
+            hj = he[j]
+            if hj > 0.0:
+                shep += vj / hj * w
+            kij = 0.5 * (ki + ke[j])
+            gh += vj * kij * gw
+            a = vj * abs(gw)
+            wsum += a
+            ksum += a * kij
+        kdh[i] = -gh / max(shep, SHEPARD_FLOOR)
+        kbar[i] = ksum / wsum if wsum > 0.0 else ki
+
+
+@njit(cache=True)
+def symmetric_pressure_gradient(x, L, qc, wall, xe, Ve, he, lo, hi, E, k, ke, kdh, kbar):
+    """``symmetric_pressure_pass`` over the extended arrays that ``evaluate_into`` just filled for the
+    same positions x (xe, Ve, he, lo, hi, E); k: each real particle's k (a ghost takes its mirror
+    particle's). kdh, kbar: outputs, sorted order; ke: work array (≥ ghosts + n)."""
+    n = x.shape[0]
+    m = count_ghosts(x, qc * L, wall)
+    for g in range(m):
+        ke[g] = k[m - 1 - g]
+    for i in range(n):
+        ke[m + i] = k[i]
+    symmetric_pressure_pass(xe, Ve, he, ke, m, n, lo, hi, L, kernel_norm(L, qc), qc, E, kdh, kbar)
+
+
 @njit(cache=True)
 def evaluate(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h, nd, dhdx, dudx, xsph):
     """``evaluate_into`` with a pair buffer of its own."""

@@ -5,7 +5,8 @@ model and the path model alike (issues 15 and 16: one home for each formula).
 
 1. ``neighbours.insertion_sort`` by position, ``smoothing_length`` L_s (eq 25 generalised, or fixed);
 2. stage 1 at (x^n, u^n): ``sph.evaluate_into`` (depth eq 20 with mirror ghosts, gradients eqs 21–22
-   and 28–29, XSPH sum eq 33), the deposit gradient (deposit as bed), ``bed_terms`` (g sinθ, g cosθ,
+   and 28–29, XSPH sum eq 33; with ``k_symmetric`` the pair-form earth-pressure gradient
+   ``sph.symmetric_pressure_gradient``), the deposit gradient (deposit as bed), ``bed_terms`` (g sinθ, g cosθ,
    k of eqs 8–9, Coulomb friction tanφ_B N⁺ with N = g cosθ + κu², depth = area / width — all read
    from the bed table: a path, or two equal stations for a constant θ);
 3. ``time_step``: eq 32 (``absolute``) or the Lagrangian ``relative`` rule of the path model;
@@ -36,7 +37,8 @@ from .physics import (alpha_coefficient, bed_normal_acceleration, coulomb_update
                       depth_gradient_from_area, driving_acceleration, earth_pressure, heun_friction_budget,
                       momentum_rate, net_acceleration, wave_speed_absolute, wave_speed_relative)
 from .kernels import gauss_gradw_e, kernel_norm
-from .sph import F_H, F_ND, F_U, F_V, F_V0, deposit_gradient, deposit_to_grid, evaluate_into
+from .sph import (F_H, F_ND, F_U, F_V, F_V0, deposit_gradient, deposit_to_grid, evaluate_into,
+                  symmetric_pressure_gradient)
 
 # status codes returned by ``advance``
 RUNNING, AT_REST, NONFINITE, ESCAPED, MAX_STEPS = 0, 1, 2, 3, 4
@@ -81,6 +83,7 @@ class StepParams(NamedTuple):
     front_threshold: float        # arrival-time depth threshold of the envelopes (m)
     own_deposit: bool = True      # the bed term includes a particle's own deposit (False: excluded, ``own_trail``)
     deposit_max_tan: float = math.inf  # no deposition where |tanθ| exceeds this (tan φ_B: a deposit cannot rest there)
+    k_symmetric: bool = False     # earth pressure in symmetric pair form (``sph.symmetric_pressure_gradient``)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -126,10 +129,12 @@ def smoothing_length(F, p):
 
 
 @njit(cache=True)
-def bed_terms(x, u, V, h, dh, du, tab, p, gs, gc, fc, k, diag):
+def bed_terms(x, u, V, h, dh, du, tab, p, gs, gc, fc, k, kb, diag):
     """Per-particle bed quantities at stage positions x and velocities u: turns the SPH area h (in
     place) into the depth and dh into ∂h/∂s (width), and fills g sinθ (gs), g cosθ (gc), the
-    friction deceleration tanφ_B N⁺ (fc; N < 0 is clipped and counted in ``diag``) and k (k)."""
+    friction deceleration tanφ_B N⁺ (fc; N < 0 is clipped and counted in ``diag``) and k (k).
+    With ``p.k_symmetric`` dh holds Σ ½(k_i + k_j) ∂A (``sph.symmetric_pressure_gradient``) and kb
+    the pair-mean k: dh becomes the k-weighted ∂h/∂s (width term with kb) and k is set to 1."""
     ns = tab.shape[1]
     g = p.g
     for i in range(x.shape[0]):
@@ -142,7 +147,10 @@ def bed_terms(x, u, V, h, dh, du, tab, p, gs, gc, fc, k, diag):
         kk, w = locate(x[i] + p.origin, p.ds, ns)
         b = table_at(tab, T_WIDTH, kk, w)
         h[i] = depth_from_area(h[i], b)
-        dh[i] = depth_gradient_from_area(dh[i], h[i], b, table_at(tab, T_DWIDTH, kk, w))
+        if p.k_symmetric:
+            dh[i] = depth_gradient_from_area(dh[i], kb[i] * h[i], b, table_at(tab, T_DWIDTH, kk, w))
+        else:
+            dh[i] = depth_gradient_from_area(dh[i], h[i], b, table_at(tab, T_DWIDTH, kk, w))
         cs = table_at(tab, T_COS, kk, w)
         gs[i] = g * table_at(tab, T_SIN, kk, w)
         gc[i] = g * cs
@@ -155,6 +163,16 @@ def bed_terms(x, u, V, h, dh, du, tab, p, gs, gc, fc, k, diag):
                 diag[D_WHERE] = x[i] + p.origin
             nrm = 0.0
         fc[i] = p.tan_phi_basal * nrm
+        k[i] = 1.0 if p.k_symmetric else earth_pressure(du[i], table_at(tab, T_KACT, kk, w),
+                                                           table_at(tab, T_KPASS, kk, w))
+
+
+@njit(cache=True)
+def particle_k(x, du, tab, p, k):
+    """k of eqs 8–9 of each particle (sign of its ∂u/∂s; k_a, k_p at its station of the bed table)."""
+    ns = tab.shape[1]
+    for i in range(x.shape[0]):
+        kk, w = locate(x[i] + p.origin, p.ds, ns)
         k[i] = earth_pressure(du[i], table_at(tab, T_KACT, kk, w), table_at(tab, T_KPASS, kk, w))
 
 
@@ -457,6 +475,7 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
     a1, ut, xt, un, xn = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     fr, fdv = np.zeros(n), np.zeros(n)
     gb1, gb2 = np.zeros(n), np.zeros(n)
+    kb1, kb2, kp, ke = np.ones(n), np.ones(n), np.empty(n), np.empty(2 * n)
     L = 0.0
     dt = 0.0
     while t < t_target:
@@ -468,11 +487,14 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         V = F[F_V]
         # stage 1 at (x^n, u^n)
         E = evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h1, nd1, dh1, du1, xs1, E)
+        if p.k_symmetric:
+            particle_k(x, du1, tab, p, kp)
+            symmetric_pressure_gradient(x, L, qc, wall, xe, Ve, he, lo, hi, E, kp, ke, dh1, kb1)
         if bed:
             deposit_gradient(x, V, bed_dep, p.dx_grid, L, qc, wall, gb1)
             if mine:
                 exclude_own_deposit(x, V, order, own, p.dx_grid, L, qc, wall, gb1)
-        bed_terms(x, u, V, h1, dh1, du1, tab, p, gs1, gc1, fc1, k1, diag)
+        bed_terms(x, u, V, h1, dh1, du1, tab, p, gs1, gc1, fc1, k1, kb1, diag)
         store_depths(F, h1, nd1)
         dt = time_step(u, V, h1, du1, L, p)
         if not dt > 0.0:
@@ -484,11 +506,14 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         predictor(x, u, V, a1, fdv, dt, p, xt, ut)
         # stage 2 at (x̃, ũ)
         E = evaluate_into(xt, ut, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h2, nd2, dh2, du2, xs2, E)
+        if p.k_symmetric:
+            particle_k(xt, du2, tab, p, kp)
+            symmetric_pressure_gradient(xt, L, qc, wall, xe, Ve, he, lo, hi, E, kp, ke, dh2, kb2)
         if bed:
             deposit_gradient(xt, V, bed_dep, p.dx_grid, L, qc, wall, gb2)
             if mine:
                 exclude_own_deposit(xt, V, order, own, p.dx_grid, L, qc, wall, gb2)
-        bed_terms(xt, ut, V, h2, dh2, du2, tab, p, gs2, gc2, fc2, k2, diag)
+        bed_terms(xt, ut, V, h2, dh2, du2, tab, p, gs2, gc2, fc2, k2, kb2, diag)
         status, i = corrector(x, u, V, a1, dh2, gb2, xs2, gs2, gc2, fc1, fc2, k2, fr, dt, p, xn, un)
         if status != RUNNING:
             return t, nsteps, status, order[i], L, dt
