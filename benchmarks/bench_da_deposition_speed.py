@@ -19,7 +19,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 CASES = {"1D-A70": "1D-A70", "example_path": str(ROOT / "config" / "da" / "example_path.yaml")}
 VARIANTS = [("no deposition", False, {}),
-            ("before issue 27", True, {"own_deposit": "include", "steep_bed": "deposit"}),
+            ("earlier defaults", True, {"own_deposit": "include", "steep_bed": "deposit"}),
             ("own deposit excluded only", True, {"own_deposit": "exclude", "steep_bed": "deposit"}),
             ("steep-bed rule only", True, {"own_deposit": "include", "steep_bed": "no_deposit"}),
             ("both (default)", True, {"own_deposit": "exclude", "steep_bed": "no_deposit"}),

@@ -1,11 +1,11 @@
-"""Momentum bookkeeping of deposition (issue 16: "with deposition the example path flow is faster").
+"""Momentum bookkeeping of deposition (the symptom: "with deposition the example path flow is faster").
 
 Isolated particles (no neighbours within the kernel support, so no earth pressure) on the 1D-A70
 slope, where basal friction exceeds the gravity component and a block decelerates: deposition
 removes volume, never velocity (eq 12 aside), so the remaining material moves as without
 deposition (to round-off: the time step follows the depth); the eq 12 term only decelerates. The
-deposit-as-bed term pushed a particle with the gradient of the deposit it laid itself (issue 27,
-docs/da-engineer-scale.md): an isolated particle slid 85-133 % farther with it. The default
+deposit-as-bed term pushed a particle with the gradient of the deposit it laid itself
+(docs/da-engineer-scale.md): an isolated particle slid 85-133 % farther with it. The default
 ``deposition.own_deposit: exclude`` leaves a particle's own deposit out of its bed term;
 ``include`` (the behaviour before) still shows the defect, so the test below can tell them apart.
 """

@@ -1,8 +1,8 @@
-"""No deposit where it could not rest (issue 27, ``deposition.steep_bed: no_deposit``).
+"""No deposit where it could not rest (``deposition.steep_bed: no_deposit``).
 
 A static deposit on a bed steeper than the basal friction angle (|tanθ| > tan φ_B) is not in
-Coulomb equilibrium: it would slide. The example path's release sits on 35° with φ_B = 28°; before
-issue 27 its thinning tail deposited there and the flow then ran down that deposit
+Coulomb equilibrium: it would slide. The example path's release sits on 35° with φ_B = 28°; with
+``deposition.steep_bed: deposit`` its thinning tail deposited there and the flow then ran down that deposit
 (docs/da-engineer-scale.md). The step-level rule is also checked against the naive twin
 (``test_step_vs_naive.py``).
 """

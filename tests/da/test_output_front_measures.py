@@ -1,4 +1,4 @@
-"""Issue 13: the DA output carries the robust front measures of granudep.front, read like the 2D runs."""
+"""The DA output carries the robust front measures of granudep.front, read like the 2D runs."""
 import numpy as np
 
 from granudep.da.api import run_da

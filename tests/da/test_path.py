@@ -1,4 +1,4 @@
-"""DA model on a path profile (issue 16): geometry, input checks, physics checks, outputs, CLI."""
+"""DA model on a path profile: geometry, input checks, physics checks, outputs, CLI."""
 import math
 import subprocess
 import sys

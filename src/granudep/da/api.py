@@ -57,7 +57,7 @@ def run_da(case_or_config, deposition: bool | dict = True, progress=None, checkp
     """
     cfg = resolve(case_or_config, deposition=deposition, **overrides)
     deposition = cfg.deposition.enabled
-    if cfg.geometry.path is not None:  # a slope profile (issue 16): granudep.da.path_run
+    if cfg.geometry.path is not None:  # a slope profile: granudep.da.path_run
         from .path_run import run_path
         return run_path(cfg, deposition)
     ka, kp = _k(cfg)

@@ -1,4 +1,4 @@
-"""Checkpoint/restart of DA runs (issue 14 item 6).
+"""Checkpoint/restart of DA runs.
 
 A DA run with deposition is several simulations (the no-deposition run for x∞, then one per x∞
 iterate). :class:`Checkpointer` keeps every finished simulation's record and the state of the

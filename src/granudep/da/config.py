@@ -105,10 +105,10 @@ class Deposition:
                                           "equation (not in eq 11; without it deposition digs holes in h)")
     own_deposit: Literal["exclude", "include"] = param(
         "exclude", doc="the bed term at a particle leaves out the deposit that particle laid itself (exclude: a "
-                       "particle is not pushed by its own trail) or counts it (include: before issue 27)")
+                       "particle is not pushed by its own trail) or counts it (include: the earlier behaviour)")
     steep_bed: Literal["no_deposit", "deposit"] = param(
         "no_deposit", doc="where |tanθ| > tan φ_B no deposit can rest (Coulomb statics): no deposition there "
-                          "(no_deposit), or deposition on any slope (deposit: before issue 27)")
+                          "(no_deposit), or deposition on any slope (deposit: the earlier behaviour)")
     min_volume_fraction: float = param(1e-6, gt=0.0, lt=1.0,
                                        doc="a particle below this fraction of its initial volume deposits entirely")
 

@@ -35,7 +35,7 @@ def coefficients(cfg) -> tuple[float, float, str]:
         return float(row.iloc[0].A), float(row.iloc[0].B), f"paper (Table 5, {cfg.case})"
     try:
         from ..regress.coefficients import interpolate_ab
-    except ImportError as exc:  # engineer C's stage not installed/built yet
+    except ImportError as exc:  # the regression stage is not installed
         raise ConfigError(f"deposition.ab_source: 'computed' needs granudep.regress.coefficients "
                           f"(not importable: {exc}); use 'paper' or 'user'") from None
     a = cfg.geometry.H0 / cfg.geometry.L0

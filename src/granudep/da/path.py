@@ -1,4 +1,4 @@
-"""A path profile for the DA model (issue 16): read once, smoothed once, tabulated along the bed.
+"""A path profile for the DA model: read once, smoothed once, tabulated along the bed.
 
 Input: a CSV with a header row that names each column **with its unit** — ``x [m], z [m]``
 (horizontal distance, elevation) or ``s [m], z [m]`` (distance along the bed, elevation), and an

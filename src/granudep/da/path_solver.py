@@ -1,4 +1,4 @@
-"""DA SPH along a path profile (issue 16): the driver of ``step.advance`` on a bed table.
+"""DA SPH along a path profile: the driver of ``step.advance`` on a bed table.
 
 The particles move along the bed; their coordinate ξ = s − s_origin is the station along the
 smoothed path (``da/path.py``) from the back wall (s_origin = start of the release) or, without a

@@ -1,4 +1,4 @@
-"""Verification of the DA model on a path profile (issue 16): rows for ``granudep verify da``.
+"""Verification of the DA model on a path profile: rows for ``granudep verify da``.
 
 * straight path = constant-θ model: a straight bed with the solver's own sin θ, cos θ gives the
   constant-θ run bit for bit; a straight path read from a CSV (θ through atan of the points)

@@ -150,7 +150,7 @@ def wave_speed_relative(h: float, g: float, L: float, dudx: float, cap: float) -
 
 
 # ----------------------------------------------------------------------------------------------
-# on a path profile (issue 16; da/path_solver.py): curved bed after Savage & Hutter (1991), width
+# on a path profile (da/path_solver.py): curved bed after Savage & Hutter (1991), width
 # ----------------------------------------------------------------------------------------------
 
 @njit(cache=True, inline="always")

@@ -1,5 +1,5 @@
 """One DA time step as a recipe of named stages (Sections 2.3–2.4, Fig 4), for the constant-θ
-model and the path model alike (issues 15 and 16: one home for each formula).
+model and the path model alike (one home for each formula).
 
 ``advance`` runs many steps inside numba; every step is
 

@@ -283,7 +283,7 @@ def run_all(quick: bool = False) -> pd.DataFrame:
     rows += check_savage_hutter(quick)
     rows += check_coulomb_block(quick)
     rows += check_deposition(quick)
-    if not quick:  # DA on a path profile (issue 16); --quick keeps the constant-theta rows only
+    if not quick:  # DA on a path profile; --quick keeps the constant-theta rows only
         from .path_verification import run_path_checks
         rows += run_path_checks(quick)
         rows += check_energy(quick)
