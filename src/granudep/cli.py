@@ -31,7 +31,7 @@ def _cmd_cases(args) -> int:
 def _cmd_warmup(args) -> int:
     """Compile (and cache) every stage's numba kernels once, before parallel jobs start."""
     import time
-    for stage in args.stages:
+    for stage in args.stages or ["da", "isph", "monitor"]:
         t0 = time.perf_counter()
         importlib.import_module(f"granudep.{stage}.api").warmup()
         LOG.info("warm-up %s: %.1f s", stage, time.perf_counter() - t0)
@@ -89,7 +89,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("cases", help="list the paper's named cases (Tables 1 and 5)")
     p.set_defaults(func=_cmd_cases)
     p = sub.add_parser("warmup", help="compile and cache the numba kernels (run once before parallel jobs)")
-    p.add_argument("stages", nargs="*", default=["da", "isph", "monitor"], choices=["da", "isph", "monitor"])
+    # no stage named: all three (argparse checks a list default against choices, so the default is
+    # filled in by the command)
+    p.add_argument("stages", nargs="*", choices=["da", "isph", "monitor"], help="stages (default: all)")
     p.add_argument("--touch", metavar="FILE", help="write this flag file when done (Snakemake target)")
     p.set_defaults(func=_cmd_warmup)
     p = sub.add_parser("verify", help="run a stage's analytic verification suite and write a CSV table")
