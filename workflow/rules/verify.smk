@@ -29,7 +29,8 @@ rule verify_da:
 # time), merged in table order.
 VERIFY_ISPH_PARTS = {
     "steady": "hydrostatic,film_flow,navier_film,sliding_block,decelerating_layer",
-    "bagnold": "bagnold,navier_bagnold",
+    "bagnold": "bagnold",
+    "navier_bagnold": "navier_bagnold",
     "transient": "dam_break,dam_break_approximate,collapse_t22a70",
 }
 
