@@ -110,10 +110,9 @@ def navier_film_row(dx: float, slip_length: float, t_end: float = 6.0, tolerance
     err = float(np.sqrt(np.mean((s.u - ua) ** 2) / np.mean(ua ** 2)))
     top = y > H - dx
     b_eff = (float(np.mean(s.u)) - g * H * H / 3.0) / (g * H)
-    law = wall["slip"] + ("" if wall.get("slip_form", "traction") == "traction" else f" ({wall['slip_form']})")
     return _row("navier_film", f"relative L2 error of u(y), b = {slip_length * 1e3:g} mm, dx = {dx * 1e3:g} mm",
                 err, 0.0, err, tolerance,
-                f"Newtonian, H={H} m, eta={eta} Pa s, theta={th} deg, {law} bed; surface speed "
+                f"Newtonian, H={H} m, eta={eta} Pa s, theta={th} deg, {wall['slip']} bed; surface speed "
                 f"{float(np.mean(s.u[top])):.4f} m/s (analytic {g * H * (slip_length + 0.5 * H):.4f}); effective slip "
                 f"length {b_eff * 1e3:.2f} mm")
 
