@@ -46,3 +46,24 @@ def test_case_tables():
         cases.material("sugar")
     with pytest.raises(Exception, match="not a valid case name"):
         cases.check_case_name("../etc")
+
+
+def test_main_run_front_skips_a_release_heap_behind_a_trough():
+    """The DA runout rule (``main_run_front``): a heap left at the back wall, deeper than the deposit
+    down-slope and separated from it by a trough just below the threshold, is not the front; the
+    walk from the deepest cell (``front_from_profile``) stops there."""
+    from granudep.front import main_run_front
+    edges = np.arange(101) * 0.01
+    depth = np.full(100, 0.005)
+    depth[:15] = 0.05                                   # heap at the wall
+    depth[19] = 0.0013                                  # one cell just below 2 d = 1.4 mm
+    depth[80:] = 0.0                                    # deposit ends at 0.8 m
+    assert front_from_profile(edges, depth, 0.0014) == pytest.approx(0.19)
+    assert main_run_front(edges, depth, 0.0014) == pytest.approx(0.80)
+    depth[19] = 0.002                                   # no trough: both rules agree
+    assert main_run_front(edges, depth, 0.0014) == front_from_profile(edges, depth, 0.0014) == pytest.approx(0.80)
+    small = depth.copy()
+    small[19] = 0.0013
+    small[20:80] = 0.0
+    small[90:92] = 0.002                                # a speck beyond a gap: < 1 % of the material
+    assert main_run_front(edges, small, 0.0014) == pytest.approx(0.19)

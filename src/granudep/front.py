@@ -32,6 +32,29 @@ def front_from_profile(x_edges: np.ndarray, depth: np.ndarray, threshold: float,
     return float(x_edges[last + 1])
 
 
+#: share of the material above threshold a contiguous run must hold to count as a main run
+MAIN_RUN_FRACTION = 0.01
+
+
+def main_run_front(x_edges: np.ndarray, depth: np.ndarray, threshold: float, width=1.0,
+                   fraction: float = MAIN_RUN_FRACTION) -> float:
+    """:func:`front_from_profile` started in the farthest down-slope contiguous run of cells with
+    depth ≥ threshold that holds at least ``fraction`` of the material above threshold (depth ×
+    width × cell length). The runout of a DA run: material left in the release zone can be deeper
+    than the deposit down-slope and separated from it by a trough just below the threshold, and the
+    walk from the deepest cell would then stop in the release zone."""
+    depth = np.asarray(depth, dtype=float)
+    above = depth >= threshold
+    if not above.any():
+        return float("nan")
+    vol = depth * width * np.diff(x_edges)
+    starts = np.flatnonzero(above & ~np.concatenate([[False], above[:-1]]))
+    ends = np.flatnonzero(above & ~np.concatenate([above[1:], [False]]))
+    runs = np.array([vol[a:b + 1].sum() for a, b in zip(starts, ends)])
+    main = np.flatnonzero(runs >= fraction * runs.sum())
+    return front_from_profile(x_edges, depth, threshold, start=int(starts[main[-1]]))
+
+
 def flow_time(time: np.ndarray, front: np.ndarray, tol: float) -> float:
     """First time after which the front moves less than ``tol`` (m) until the end of the record."""
     time = np.asarray(time, dtype=float)

@@ -93,8 +93,9 @@ def bed(tab, s, p):
                                                         T_A, T_B)}
 
 
-def stage(x, u, V, L, tab, p, depb, dxg):
-    """One evaluation: depth, slopes and the per-particle bed quantities."""
+def stage(x, u, V, L, tab, p, depb, dxg, k_state=None):
+    """One evaluation: depth, slopes and the per-particle bed quantities; ``k_state``: the strained
+    k of each particle (``earth_pressure_switch`` 'strain') instead of the sign switch."""
     area, nd, dA, du, xsph = fields(x, u, V, L, p.kernel_support, p.back_wall)
     b = bed(tab, x + p.origin, p)
     h = area / b[T_WIDTH]
@@ -102,7 +103,7 @@ def stage(x, u, V, L, tab, p, depb, dxg):
     gs, gc = p.g * b[T_SIN], p.g * b[T_COS]
     N = np.maximum(p.g * b[T_COS] + (b[T_KAPPA] if p.centripetal else 0.0) * u * u, 0.0)
     fc = p.tan_phi_basal * N
-    k = np.where(du >= 0.0, b[T_KACT], b[T_KPASS])
+    k = np.where(du >= 0.0, b[T_KACT], b[T_KPASS]) if k_state is None else k_state
     if p.k_symmetric:   # pair form: k-weighted area gradient with ½(k_i + k_j) inside the sum
         kdA, kbar = symmetric_pressure(x, V, L, p.kernel_support, p.back_wall, k)
         dh = (kdA - kbar * h * b[T_DWIDTH]) / b[T_WIDTH]
@@ -118,24 +119,38 @@ def coulomb(ustar, budget):
     return np.where(ustar > budget, ustar - budget, np.where(ustar < -budget, ustar + budget, 0.0))
 
 
-def step(x, u, V, V0, nd_prev, dep, depb, binv, p, tab):
-    """One RK2 step of the DA model from sorted (x, u); returns the new state and Δt."""
+def strained(k0, du, dt, b, p):
+    """k after the strain −∂u/∂x Δt: k0 − (k_p − k_a)/ε_k ∂u/∂x Δt within [k_a, k_p] (b: bed rows)."""
+    return np.clip(k0 - (b[T_KPASS] - b[T_KACT]) * p.k_strain * du * dt, b[T_KACT], b[T_KPASS])
+
+
+def step(x, u, V, V0, nd_prev, dep, depb, binv, p, tab, k_state=None):
+    """One RK2 step of the DA model from sorted (x, u); returns the new state and Δt (and the new
+    strained k when ``k_state`` is given: Heun mean of the two stages' ∂u/∂x)."""
     live = V > 0.0
+    strain = k_state is not None
     if p.L_fixed > 0:
         L = p.L_fixed
     else:
         ok = live & (nd_prev > 0.0)
         L = p.smoothing_B * ok.sum() / nd_prev[ok].sum()
-    s1 = stage(x, u, V, L, tab, p, depb, p.dx_grid)
+    wf = np.ones_like(x)
+    k1 = None
+    if strain:
+        b1 = bed(tab, x + p.origin, p)
+        k1 = np.where(live, np.clip(k_state, b1[T_KACT], b1[T_KPASS]), k_state)
+        wf = b1[T_KPASS] + 0.5 * (b1[T_KPASS] - b1[T_KACT]) * p.k_strain
+    s1 = stage(x, u, V, L, tab, p, depb, p.dx_grid, k1)
     h = s1["h"]
+    hw = h * wf                                   # c²/g of the time step
     if p.dt_relative:
         wmax = np.max(np.abs(u[live]))
-        c = np.sqrt(p.g * h) + np.minimum(L * np.abs(s1["du"]), 2.0 * wmax)
+        c = np.sqrt(p.g * hw) + np.minimum(L * np.abs(s1["du"]), 2.0 * wmax)
         dt = p.cfl * L / c[live].max()
         if wmax * dt > p.cfl * p.geometry_step:
             dt = p.cfl * p.geometry_step / wmax
     else:
-        dt = p.cfl * L / np.maximum(np.abs(u), np.sqrt(p.g * h))[live].max()
+        dt = p.cfl * L / np.maximum(np.abs(u), np.sqrt(p.g * hw))[live].max()
     # stage 1: deposition (eqs 14, 34, 36) and the eq 12 loss
     a1, fc1 = s1["a"], s1["fc"]
     an = np.where(u > 0, a1 - fc1, np.where(u < 0, a1 + fc1, np.where(a1 > fc1, a1 - fc1,
@@ -159,7 +174,10 @@ def step(x, u, V, V0, nd_prev, dep, depb, binv, p, tab):
     xt = np.where(live, x + dt * u, x)
     if p.back_wall:
         xt = np.abs(xt)
-    s2 = stage(xt, ut, V, L, tab, p, depb, p.dx_grid)
+    k2 = None
+    if strain:
+        k2 = np.where(live, strained(k1, s1["du"], dt, bed(tab, xt + p.origin, p), p), k1)
+    s2 = stage(xt, ut, V, L, tab, p, depb, p.dx_grid, k2)
     un = coulomb(u + 0.5 * dt * (a1 + s2["a"]), 0.5 * dt * (fc1 + s2["fc"]) + loss)
     xn = x + dt * (0.5 * (u + un) + p.xsph_delta * s2["xsph"])
     if p.back_wall:
@@ -168,6 +186,8 @@ def step(x, u, V, V0, nd_prev, dep, depb, binv, p, tab):
         un = np.where(back & (un < 0), 0.0, un)
     un = np.where(live, un, 0.0)
     xn = np.where(live, xn, x)
+    kn = np.where(live, strained(k1, 0.5 * s1["du"] + 0.5 * s2["du"], dt, bed(tab, xn + p.origin, p), p), k1) \
+        if strain else None
     # deposition onto the grid (linear weights to the two nearest cell centres)
     dep, depb = dep.copy(), depb.copy()
     Vn = V.copy()
@@ -189,4 +209,6 @@ def step(x, u, V, V0, nd_prev, dep, depb, binv, p, tab):
         for kk, v in parts:
             dep[kk] += v
             depb[kk] += v * binv[kk]
+    if strain:
+        return xn, un, Vn, dep, depb, s1["h"], dt, L, fr, kn
     return xn, un, Vn, dep, depb, s1["h"], dt, L, fr

@@ -14,7 +14,7 @@ import naive_da as nv
 from granudep.da.config import resolve
 from granudep.da.path import N_TABLE, T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
 from granudep.da.solver import Physics, constant_bed_table, step_params
-from granudep.da.sph import F_H, F_ND, F_U, F_V, F_V0, N_FIELDS
+from granudep.da.sph import F_H, F_K, F_ND, F_U, F_V, F_V0, N_FIELDS
 from granudep.da.step import MAX_STEPS, StepParams, advance, own_trail
 
 N = 48
@@ -33,9 +33,10 @@ def _state(rng, n=N, L0=0.2, dead=()):
     return x, u, V, V0, nd
 
 
-def _kernel_step(x, u, V, V0, nd, dep, depb, binv, p, tab, ng_env=0):
+def _kernel_step(x, u, V, V0, nd, dep, depb, binv, p, tab, ng_env=0, k_state=None):
     F = np.zeros((N_FIELDS, x.size))
     F[F_U], F[F_V], F[F_V0], F[F_ND] = u, V, V0, nd
+    F[F_K] = 1.0 if k_state is None else k_state
     xk, order = x.copy(), np.arange(x.size, dtype=np.int64)
     dep, depb = dep.copy(), depb.copy()
     env = np.zeros((3, ng_env))
@@ -61,19 +62,29 @@ def _constant_case(deposition):
     return cfg, p, constant_bed_table(cfg.theta, phys)
 
 
-@pytest.mark.parametrize("deposition,symmetric", [(False, False), (True, False), (False, True), (True, True)])
-def test_constant_slope_step_matches_naive(deposition, symmetric):
+def _k_state(rng, n=N):
+    """A strained k per particle: some at the limits (0.9, 2.0 of the test tables), some inside."""
+    return np.clip(rng.uniform(0.7, 2.2, n), 0.5, 3.0)
+
+
+@pytest.mark.parametrize("deposition,switch", [(False, "particle"), (True, "particle"), (False, "symmetric"),
+                                               (True, "symmetric"), (False, "strain"), (True, "strain")])
+def test_constant_slope_step_matches_naive(deposition, switch):
     rng = np.random.default_rng(7)
     cfg, p, tab = _constant_case(deposition)
-    p = p._replace(k_symmetric=symmetric)
+    p = p._replace(k_symmetric=switch != "particle", k_strain=20.0 if switch == "strain" else 0.0)
     x, u, V, V0, nd = _state(rng, dead=(5,))
+    ks = _k_state(np.random.default_rng(3)) if switch == "strain" else None
     ng = 240
     dep = np.zeros(ng)
     dep[20:60] = 1e-5 * (1 + np.sin(np.arange(40)))   # an existing deposit: the bed term acts
     binv = np.ones(ng)
-    xk, F, depk, _, dt, L = _kernel_step(x, u, V, V0, nd, dep, dep, binv, p, tab)
-    xn, un, Vn, depn, _, h, dt_n, L_n, fr = nv.step(x, u, V, V0, nd, dep, dep, binv, p, tab)
+    xk, F, depk, _, dt, L = _kernel_step(x, u, V, V0, nd, dep, dep, binv, p, tab, k_state=ks)
+    xn, un, Vn, depn, _, h, dt_n, L_n, fr, *kn = nv.step(x, u, V, V0, nd, dep, dep, binv, p, tab, k_state=ks)
     assert L == pytest.approx(L_n, rel=1e-14) and dt == pytest.approx(dt_n, rel=1e-13)
+    if switch == "strain":
+        _compare(F[F_K], kn[0], "strained k")
+        assert 0 < np.count_nonzero((F[F_K] > 0.9) & (F[F_K] < 2.0)) < N     # some inside the limits, some on them
     _compare(F[F_H], h, "depth")
     _compare(F[F_U], un, "velocity")
     _compare(xk - x, xn - x, "displacement")
@@ -85,9 +96,9 @@ def test_constant_slope_step_matches_naive(deposition, symmetric):
     assert F[F_U, 5] == 0.0 and xk[5] == x[5]             # an emptied particle stays put
 
 
-@pytest.mark.parametrize("max_tan,symmetric", [(math.inf, False), (math.tan(math.radians(25.5)), False),
-                                                (math.tan(math.radians(25.5)), True)])
-def test_path_step_matches_naive_with_width_curvature_and_relative_dt(max_tan, symmetric):
+@pytest.mark.parametrize("max_tan,switch", [(math.inf, "particle"), (math.tan(math.radians(25.5)), "particle"),
+                                             (math.tan(math.radians(25.5)), "symmetric"), (math.inf, "strain")])
+def test_path_step_matches_naive_with_width_curvature_and_relative_dt(max_tan, switch):
     """A bed table with varying slope, curvature and width (the path model's stage functions);
     deposition on every slope, or none where the bed (30° -> 12°) is steeper than φ_B = 25.5°."""
     rng = np.random.default_rng(11)
@@ -103,16 +114,20 @@ def test_path_step_matches_naive_with_width_curvature_and_relative_dt(max_tan, s
     tab[T_KACT], tab[T_KPASS] = 0.9, 2.0
     tab[T_A], tab[T_B] = -0.02 - 0.05 * s, 2.0
     p = p0._replace(origin=0.01, ds=ds, centripetal=True, has_width=True, dt_relative=True, geometry_step=0.004,
-                    x_min=0.0, deposit_max_tan=max_tan, k_symmetric=symmetric)
+                    x_min=0.0, deposit_max_tan=max_tan, k_symmetric=switch != "particle",
+                    k_strain=20.0 if switch == "strain" else 0.0)
     x, u, V, V0, nd = _state(rng)
+    ks = _k_state(np.random.default_rng(3)) if switch == "strain" else None
     ng = 240
     dep = np.zeros(ng)
     dep[10:50] = 2e-5
     c = (np.arange(ng) + 0.5) * p.dx_grid + p.origin
     binv = 1.0 / (1.0 + 2.0 * c)
     depb = dep * binv
-    xk, F, depk, depbk, dt, L = _kernel_step(x, u, V, V0, nd, dep, depb, binv, p, tab, ng_env=ng)
-    xn, un, Vn, depn, depbn, h, dt_n, L_n, fr = nv.step(x, u, V, V0, nd, dep, depb, binv, p, tab)
+    xk, F, depk, depbk, dt, L = _kernel_step(x, u, V, V0, nd, dep, depb, binv, p, tab, ng_env=ng, k_state=ks)
+    xn, un, Vn, depn, depbn, h, dt_n, L_n, fr, *kn = nv.step(x, u, V, V0, nd, dep, depb, binv, p, tab, k_state=ks)
+    if switch == "strain":
+        _compare(F[F_K], kn[0], "strained k")
     assert dt == pytest.approx(dt_n, rel=1e-13)
     for mine, ref, what in ((F[F_H], h, "depth"), (F[F_U], un, "velocity"), (xk - x, xn - x, "displacement"),
                             (F[F_V], Vn, "volume"), (depk, depn, "deposit"), (depbk, depbn, "deposit/width")):

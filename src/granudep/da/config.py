@@ -59,16 +59,21 @@ class Numerics:
     xsph_delta: float = param(0.05, ge=0.0, le=0.5, doc="δ of the XSPH correction eq 33")
     earth_pressure: Literal["paper", "savage_hutter", "one"] = param(
         "paper", doc="k: eqs 8-9 with θ (paper), with φ_B (Savage-Hutter), or k = 1")
-    earth_pressure_switch: Literal["particle", "symmetric"] = param(
-        "particle", doc="how the active/passive k of eqs 8-9 enters the depth-gradient sum. particle: "
-                        "-k_i g cosθ ∂h/∂s_i with k_i from the sign of the particle's own ∂u/∂s (eq 11 read "
-                        "literally; the pair forces of two particles in different states do not balance, and on "
-                        "the 1 km path above N = 2000 a pile nearly at rest gains energy). symmetric: "
-                        "g cosθ Σ_j V_j ½(k_i + k_j) ∇W_ij (the SPH form of -(1/h) ∂(k g cosθ h²/2)/∂s), "
-                        "pair forces equal and opposite; with k_i from the sign of ∂u/∂s_i (= the sign of -dh_i/dt) "
-                        "the semi-discrete energy can only fall when k_a <= 1 <= k_p, but piles never reach "
-                        "numerics.u_rest (a jitter of ~1e-2 m/s stays; docs/da-engineer-scale.md). No effect "
-                        "with earth_pressure 'one'")
+    earth_pressure_switch: Literal["strain", "particle", "symmetric"] = param(
+        "strain", doc="how the active/passive k of eqs 8-9 enters the momentum balance. strain (default): k is a "
+                      "particle state that follows the along-slope strain (Hungr 1995), dk = -(k_p - k_a)/"
+                      "earth_pressure_strain ∂u/∂s dt within [k_a, k_p], in the pair form "
+                      "g cosθ Σ_j V_j ½(k_i + k_j) ∇W_ij (the SPH form of -(1/h) ∂(k g cosθ h²/2)/∂s); sustained "
+                      "stretching or compression reaches eqs 8-9, a pile whose ∂u/∂s jitters keeps its k, and the "
+                      "time step includes the wave speed of that stiffness. particle: -k_i g cosθ ∂h/∂s_i with k_i "
+                      "from the sign of the particle's own ∂u/∂s (eq 11 read literally; creates energy on piles "
+                      "coming to rest above N = 2000-4000). symmetric: the pair form with that sign switch (piles "
+                      "never reach numerics.u_rest; creates energy on 1D-A70 at N = 8000). "
+                      "docs/da-engineer-scale.md has the measurements. No effect with earth_pressure 'one'")
+    earth_pressure_strain: float = param(
+        0.05, gt=0.0, le=1.0, doc="ε_k of earth_pressure_switch 'strain': the along-slope strain (Δh/h) that takes "
+                                  "k from k_a to k_p (a few per cent: the wall movement that mobilises passive "
+                                  "pressure in sand; docs/da-engineer-scale.md has the sensitivity)")
     basal_friction: bool = param(True, doc="Coulomb basal friction tan φ_B (off for the Ritter check)")
     t_end: float = param(20.0, gt=0.0, unit="s", doc="hard stop if the flow has not come to rest")
     u_rest: float = param(1e-4, gt=0.0, unit="m s-1", doc="at rest when every |u| is below this")

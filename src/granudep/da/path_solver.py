@@ -41,8 +41,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..front import MAIN_RUN_FRACTION, main_run_front
 from .path import N_TABLE, T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
-from .solver import (AT_REST, ESCAPED, F_ND, F_U, F_V, F_V0, MAX_STEPS, N_FIELDS, NONFINITE, RUNNING,  # noqa: F401
+from .solver import (AT_REST, ESCAPED, F_K, F_ND, F_U, F_V, F_V0, MAX_STEPS, N_FIELDS, NONFINITE, RUNNING,  # noqa: F401
                      grid_depth, particle_depths, smooth_deposit, smoothing_length, step_params)
 from .step import D_DEFICIT, D_LIFT, D_WHERE, E_H, E_T, E_U, advance, mark_envelopes, own_trail  # noqa: F401
 
@@ -147,24 +148,10 @@ def path_params(cfg, setup: PathSetup, phys, centripetal: bool):
         geometry_step=GEOMETRY_STEP * setup.bed.sigma if math.isfinite(setup.bed.sigma) else 1e300)
 
 
-MAIN_RUN_FRACTION = 0.01
-
-
 def path_front(edges, depth, thr, width, fraction: float = MAIN_RUN_FRACTION) -> float:
-    """Front on a path: ``front.front_from_profile`` started in the farthest down-slope contiguous
-    run of cells with h + h_D ≥ thr that holds at least ``fraction`` of the material above threshold.
-    On a long path the main deposit is often separated from material left in the release zone; the
-    constant-θ rule (walk from the deepest cell) would then stop at the release."""
-    from ..front import front_from_profile
-    above = depth >= thr
-    if not above.any():
-        return float("nan")
-    vol = depth * width * np.diff(edges)
-    starts = np.flatnonzero(above & ~np.concatenate([[False], above[:-1]]))
-    ends = np.flatnonzero(above & ~np.concatenate([above[1:], [False]]))
-    runs = np.array([vol[a:b + 1].sum() for a, b in zip(starts, ends)])
-    main = np.flatnonzero(runs >= fraction * runs.sum())
-    return front_from_profile(edges, depth, thr, start=int(starts[main[-1]]))
+    """Front on a path: ``front.main_run_front`` (the farthest down-slope contiguous run holding at
+    least ``fraction`` of the material above threshold), with the channel width."""
+    return main_run_front(edges, depth, thr, width, fraction)
 
 
 def _record(rec, cfg, setup, x, F, order, dep, t, L, dt, steps, dxg, ng, width_c, thr):
@@ -194,6 +181,7 @@ def initial_path_state(setup: PathSetup):
     F = np.zeros((N_FIELDS, n))
     F[F_V] = setup.V0
     F[F_V0] = F[F_V]
+    F[F_K] = 1.0  # hydrostatic start of the strained earth pressure (clipped to [k_a, k_p] at the first stage)
     F[F_ND] = 1.0 / setup.dx0
     return x, F, np.arange(n, dtype=np.int64)
 

@@ -44,6 +44,24 @@ def earth_pressure(dudx: float, k_act: float, k_pass: float) -> float:
 
 
 @njit(cache=True, inline="always")
+def earth_pressure_strained(k_old: float, dudx: float, dt: float, k_act: float, k_pass: float,
+                            inv_strain: float) -> float:
+    """k of eqs 8–9 carried as a state that follows the strain (Hungr 1995; McDougall & Hungr 2004):
+    dk = −(k_p − k_a)/ε_k ∂u/∂x dt, kept within [k_a, k_p] (``inv_strain`` = 1/ε_k). Sustained
+    stretching reaches k_a and sustained compression k_p after a strain ε_k, as eqs 8–9 say; a pile
+    whose ∂u/∂x only jitters about zero keeps its k instead of flipping between k_a and k_p."""
+    k = k_old - (k_pass - k_act) * inv_strain * dudx * dt
+    return min(max(k, k_act), k_pass)
+
+
+@njit(cache=True, inline="always")
+def earth_pressure_wave_factor(k_act: float, k_pass: float, inv_strain: float) -> float:
+    """c²/(g h) of the strained earth pressure: P = k g h²/2 with dk = (k_p − k_a)/ε_k dh/h gives
+    dP/dh = g h (k + (k_p − k_a)/(2 ε_k)); bounded by its value at k = k_p."""
+    return k_pass + 0.5 * (k_pass - k_act) * inv_strain
+
+
+@njit(cache=True, inline="always")
 def coulomb_update(u_star: float, friction_dv: float) -> float:
     """Apply a Coulomb resistance worth ``friction_dv`` (≥ 0, m/s this step) to the friction-free
     velocity ``u_star``: it reduces |u| and stops the particle, never reverses it."""

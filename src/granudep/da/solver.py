@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .path import N_TABLE, T_A, T_B, T_COS, T_KACT, T_KPASS, T_SIN, T_WIDTH
-from .sph import (F_H, F_ND, F_U, F_V, F_V0, N_FIELDS, deposit_gradient, evaluate, grid_depth,  # noqa: F401
+from .sph import (F_H, F_K, F_ND, F_U, F_V, F_V0, N_FIELDS, deposit_gradient, evaluate, grid_depth,  # noqa: F401
                   particle_depths)
 from .step import AT_REST, ESCAPED, MAX_STEPS, NONFINITE, RUNNING, StepParams, advance, own_trail, smoothing_length
 
@@ -95,7 +95,9 @@ def step_params(cfg, phys: Physics) -> StepParams:
         geometry_step=math.inf, front_threshold=float(cfg.front_threshold),
         own_deposit=dep.own_deposit == "include",
         deposit_max_tan=math.tan(math.radians(mat.phi_basal_deg)) if dep.steep_bed == "no_deposit" else math.inf,
-        k_symmetric=num.earth_pressure_switch == "symmetric" and num.earth_pressure != "one")
+        k_symmetric=num.earth_pressure_switch in ("symmetric", "strain") and num.earth_pressure != "one",
+        k_strain=1.0 / num.earth_pressure_strain if num.earth_pressure_switch == "strain" and num.earth_pressure != "one"
+        else 0.0)
 
 
 def constant_bed_table(theta: float, phys: Physics) -> np.ndarray:
@@ -129,6 +131,7 @@ def initial_state(cfg):
     F = np.zeros((N_FIELDS, n))
     F[F_V] = cfg.geometry.H0 * dx
     F[F_V0] = F[F_V]
+    F[F_K] = 1.0  # hydrostatic start of the strained earth pressure (clipped to [k_a, k_p] at the first stage)
     F[F_ND] = 1.0 / dx  # number density of the lattice: first L_s = B dx (eq 25)
     order = np.arange(n, dtype=np.int64)
     return x, F, order
@@ -142,6 +145,7 @@ def custom_state(x, volume, u):
     F[F_V] = volume
     F[F_V0] = volume
     F[F_U] = u
+    F[F_K] = 1.0
     F[F_ND] = (n - 1) / (x[-1] - x[0])
     return x, F, np.arange(n, dtype=np.int64)
 
@@ -172,7 +176,7 @@ def smooth_deposit(dep: np.ndarray, L: float, qc: float, dxg: float) -> np.ndarr
 
 
 def _record(rec, cfg, x, F, order, dep, t, L, dt, steps, dxg, ng, thr):
-    from ..front import front_from_profile
+    from ..front import main_run_front
     n = x.shape[0]
     qc = cfg.numerics.kernel_support
     wall = cfg.geometry.back_wall
@@ -185,7 +189,7 @@ def _record(rec, cfg, x, F, order, dep, t, L, dt, steps, dxg, ng, thr):
     depo = smooth_deposit(dep, L, qc, dxg)
     rec.flow_depth.append(flow)
     rec.deposit_depth.append(depo.copy())
-    rec.front.append(front_from_profile(rec.x_edges, flow + depo, thr))
+    rec.front.append(main_run_front(rec.x_edges, flow + depo, thr))
     rec.time.append(t)
     rec.smoothing_length.append(L)
     rec.time_step.append(dt)

@@ -15,8 +15,8 @@ from .kernels import gauss_gradw_e, gauss_w, gauss_w_e, kernel_norm
 from .neighbours import build_extended, count_ghosts, windows
 
 # rows of the per-particle state matrix F (sorted order; x is kept separately)
-F_U, F_V, F_V0, F_ND, F_H = 0, 1, 2, 3, 4
-N_FIELDS = 5
+F_U, F_V, F_V0, F_ND, F_H, F_K = 0, 1, 2, 3, 4, 5
+N_FIELDS = 6
 
 # fast-math for the pair passes WITHOUT 'reassoc': re-associated (vectorised) sums depend on the
 # alignment of the pair buffer and made two identical runs differ in the last bit.

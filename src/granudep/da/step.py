@@ -34,10 +34,11 @@ from .neighbours import insertion_sort
 from .path import T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
 from .physics import (alpha_coefficient, bed_normal_acceleration, coulomb_update, critical_momentum,
                       deposited_fraction, deposition_rate, deposition_velocity_loss, depth_from_area,
-                      depth_gradient_from_area, driving_acceleration, earth_pressure, heun_friction_budget,
+                      depth_gradient_from_area, driving_acceleration, earth_pressure, earth_pressure_strained,
+                      earth_pressure_wave_factor, heun_friction_budget,
                       momentum_rate, net_acceleration, wave_speed_absolute, wave_speed_relative)
 from .kernels import gauss_gradw_e, kernel_norm
-from .sph import (F_H, F_ND, F_U, F_V, F_V0, deposit_gradient, deposit_to_grid, evaluate_into,
+from .sph import (F_H, F_K, F_ND, F_U, F_V, F_V0, deposit_gradient, deposit_to_grid, evaluate_into,
                   symmetric_pressure_gradient)
 
 # status codes returned by ``advance``
@@ -84,6 +85,7 @@ class StepParams(NamedTuple):
     own_deposit: bool = True      # the bed term includes a particle's own deposit (False: excluded, ``own_trail``)
     deposit_max_tan: float = math.inf  # no deposition where |tanθ| exceeds this (tan φ_B: a deposit cannot rest there)
     k_symmetric: bool = False     # earth pressure in symmetric pair form (``sph.symmetric_pressure_gradient``)
+    k_strain: float = 0.0         # 1/ε_k > 0: k is a particle state following the strain (``strained_k``), pair form
 
 
 # ----------------------------------------------------------------------------------------------
@@ -177,6 +179,29 @@ def particle_k(x, du, tab, p, k):
 
 
 @njit(cache=True)
+def strained_k(x, V, k0, du_a, du_b, wa, wb, dt, tab, p, k):
+    """k of each particle after the strain −(wa ∂u/∂s_a + wb ∂u/∂s_b) Δt from k0
+    (``physics.earth_pressure_strained``, limits k_a, k_p at its station); Δt = 0 clips k0 only."""
+    ns = tab.shape[1]
+    for i in range(x.shape[0]):
+        if V[i] <= 0.0:
+            k[i] = k0[i]
+            continue
+        kk, w = locate(x[i] + p.origin, p.ds, ns)
+        k[i] = earth_pressure_strained(k0[i], wa * du_a[i] + wb * du_b[i], dt, table_at(tab, T_KACT, kk, w),
+                                       table_at(tab, T_KPASS, kk, w), p.k_strain)
+
+
+@njit(cache=True)
+def strained_wave_factor(x, tab, p, wf):
+    """c²/(g h) of the strained earth pressure at each particle's station (time step)."""
+    ns = tab.shape[1]
+    for i in range(x.shape[0]):
+        kk, w = locate(x[i] + p.origin, p.ds, ns)
+        wf[i] = earth_pressure_wave_factor(table_at(tab, T_KACT, kk, w), table_at(tab, T_KPASS, kk, w), p.k_strain)
+
+
+@njit(cache=True)
 def store_depths(F, h, nd):
     """Keep the stage-1 depth and (for particles with volume) the number density for eq 25."""
     V = F[F_V]
@@ -187,9 +212,10 @@ def store_depths(F, h, nd):
 
 
 @njit(cache=True)
-def time_step(u, V, h, du, L, p):
+def time_step(u, V, h, du, L, p, wf):
     """Δt = CFL L_s / max_i c_i: c = max(|u|, √(gh)) (eq 32, ``absolute``) or √(gh) + L|∂u/∂s|
-    capped at 2 max|u| (``relative``), plus |u| Δt ≤ CFL · geometry_step there."""
+    capped at 2 max|u| (``relative``), plus |u| Δt ≤ CFL · geometry_step there. wf: c²/(gh) of the
+    earth pressure per particle (1, or ``strained_wave_factor``: √(gh) becomes √(g h wf))."""
     n = u.shape[0]
     vmax = 0.0
     wmax = 0.0
@@ -200,9 +226,9 @@ def time_step(u, V, h, du, L, p):
     for i in range(n):
         if V[i] > 0.0:
             if p.dt_relative:
-                c = wave_speed_relative(h[i], p.g, L, du[i], 2.0 * wmax)
+                c = wave_speed_relative(h[i] * wf[i], p.g, L, du[i], 2.0 * wmax)
             else:
-                c = wave_speed_absolute(u[i], h[i], p.g)
+                c = wave_speed_absolute(u[i], h[i] * wf[i], p.g)
             if c > vmax:
                 vmax = c
     dt = p.cfl * L / vmax
@@ -476,6 +502,8 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
     fr, fdv = np.zeros(n), np.zeros(n)
     gb1, gb2 = np.zeros(n), np.zeros(n)
     kb1, kb2, kp, ke = np.ones(n), np.ones(n), np.empty(n), np.empty(2 * n)
+    strain = p.k_symmetric and p.k_strain > 0.0
+    wf, ks = np.ones(n), np.empty(n)
     L = 0.0
     dt = 0.0
     while t < t_target:
@@ -487,7 +515,11 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         V = F[F_V]
         # stage 1 at (x^n, u^n)
         E = evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h1, nd1, dh1, du1, xs1, E)
-        if p.k_symmetric:
+        if strain:
+            strained_k(x, V, F[F_K], du1, du1, 0.0, 0.0, 0.0, tab, p, kp)
+            strained_wave_factor(x, tab, p, wf)
+            symmetric_pressure_gradient(x, L, qc, wall, xe, Ve, he, lo, hi, E, kp, ke, dh1, kb1)
+        elif p.k_symmetric:
             particle_k(x, du1, tab, p, kp)
             symmetric_pressure_gradient(x, L, qc, wall, xe, Ve, he, lo, hi, E, kp, ke, dh1, kb1)
         if bed:
@@ -496,7 +528,7 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
                 exclude_own_deposit(x, V, order, own, p.dx_grid, L, qc, wall, gb1)
         bed_terms(x, u, V, h1, dh1, du1, tab, p, gs1, gc1, fc1, k1, kb1, diag)
         store_depths(F, h1, nd1)
-        dt = time_step(u, V, h1, du1, L, p)
+        dt = time_step(u, V, h1, du1, L, p, wf)
         if not dt > 0.0:
             return t, nsteps, NONFINITE, -1, L, dt
         last = t + dt >= t_target
@@ -506,7 +538,10 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         predictor(x, u, V, a1, fdv, dt, p, xt, ut)
         # stage 2 at (x̃, ũ)
         E = evaluate_into(xt, ut, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h2, nd2, dh2, du2, xs2, E)
-        if p.k_symmetric:
+        if strain:
+            strained_k(xt, V, kp, du1, du1, 1.0, 0.0, dt, tab, p, ks)
+            symmetric_pressure_gradient(xt, L, qc, wall, xe, Ve, he, lo, hi, E, ks, ke, dh2, kb2)
+        elif p.k_symmetric:
             particle_k(xt, du2, tab, p, kp)
             symmetric_pressure_gradient(xt, L, qc, wall, xe, Ve, he, lo, hi, E, kp, ke, dh2, kb2)
         if bed:
@@ -517,6 +552,8 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         status, i = corrector(x, u, V, a1, dh2, gb2, xs2, gs2, gc2, fc1, fc2, k2, fr, dt, p, xn, un)
         if status != RUNNING:
             return t, nsteps, status, order[i], L, dt
+        if strain:  # k^{n+1}: the Heun mean of the two stages' strain rates
+            strained_k(xn, V, kp, du1, du2, 0.5, 0.5, dt, tab, p, F[F_K])
         t_new = t_target if last else t + dt
         mark_envelopes(env, x, xn, h1, un, V, t_new, p.dx_grid, p.front_threshold)
         umax = commit(x, F, xn, un, fr, dep, depb, binv, p, order, own)

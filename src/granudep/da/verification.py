@@ -253,16 +253,17 @@ def energy_pile_config(switch: str, n: int = 4000, t_end: float = 120.0, folder=
             "output": {"dt_output": 2.0, "dx_grid": 0.5, "front_depth_threshold": 0.05, "flow_time_tolerance": 0.5}}
 
 
-def check_energy(quick: bool = False, switch: str = "symmetric", n: int = 4000):
+def check_energy(quick: bool = False, switch: str = "strain", n: int = 4000):
     """A pile coming to rest must not gain energy (``granudep.da.energy``): the Coulomb bound
     W_min/ΔE ≤ 1 and no rise of E between outputs, within ENERGY_RATIO_TOL / ENERGY_RISE_TOL."""
     from .api import run_da
     from .energy import energy_report
     ds = run_da(energy_pile_config(switch, n), deposition=False, progress=False)
     rep = energy_report(ds)
-    old = ("the particle switch fails this row: at N = 4000 E rises in 2 output intervals, by up to 3.3e-3 of "
-           "E0 - E_end (W_min/dE 0.983); at N = 8000 (t_end 300 s) W_min/dE = 1.028. Necessary, not sufficient: "
-           "the symmetric switch passes here and gives W_min/dE = 1.031 on 1D-A70 at N = 8000")
+    old = ("the sign switch of eqs 8-9 fails this row (numerics.earth_pressure_switch particle): at N = 4000 E "
+           "rises in 2 output intervals, by up to 3.3e-3 of E0 - E_end (W_min/dE 0.983); at N = 8000 (t_end 300 s) "
+           "W_min/dE = 1.028. Necessary, not sufficient: the symmetric sign switch passes here and gives "
+           "W_min/dE = 1.031 on 1D-A70 at N = 8000")
     res = f"1 km path, N = {n}, switch {switch}, t = {float(ds.time[-1]):.0f} s"
     return [
         _row("energy", "W_min / (E0 - E_end)", rep["coulomb_ratio"], 1.0, max(0.0, rep["coulomb_ratio"] - 1.0),
