@@ -181,7 +181,7 @@ def initial_path_state(setup: PathSetup):
     F = np.zeros((N_FIELDS, n))
     F[F_V] = setup.V0
     F[F_V0] = F[F_V]
-    F[F_K] = 1.0  # hydrostatic start of the strained earth pressure (clipped to [k_a, k_p] at the first stage)
+    F[F_K] = 0.0  # the released mass starts in the active state: clipped to k_a at the first stage
     F[F_ND] = 1.0 / setup.dx0
     return x, F, np.arange(n, dtype=np.int64)
 

@@ -131,7 +131,7 @@ def initial_state(cfg):
     F = np.zeros((N_FIELDS, n))
     F[F_V] = cfg.geometry.H0 * dx
     F[F_V0] = F[F_V]
-    F[F_K] = 1.0  # hydrostatic start of the strained earth pressure (clipped to [k_a, k_p] at the first stage)
+    F[F_K] = 0.0  # the released mass starts in the active state: clipped to k_a at the first stage
     F[F_ND] = 1.0 / dx  # number density of the lattice: first L_s = B dx (eq 25)
     order = np.arange(n, dtype=np.int64)
     return x, F, order
@@ -145,7 +145,7 @@ def custom_state(x, volume, u):
     F[F_V] = volume
     F[F_V0] = volume
     F[F_U] = u
-    F[F_K] = 1.0
+    F[F_K] = 0.0  # active state, as the released column
     F[F_ND] = (n - 1) / (x[-1] - x[0])
     return x, F, np.arange(n, dtype=np.int64)
 
