@@ -26,7 +26,7 @@ def test_row_passed_needs_a_finite_tolerance_and_a_finite_error():
 
 
 def test_both_suites_build_rows_with_the_shared_rule():
-    from granudep.da.verification import _row as da_row
+    from granudep.da.verification_rows import row as da_row
     from granudep.isph.verification import _row as isph_row
     for row in (da_row, isph_row):
         assert row("c", "q", 1.0, 1.0, 0.5, math.inf, "")["passed"] is False

@@ -6,6 +6,8 @@ import logging
 import sys
 import time
 
+from .signals import STOP
+
 LOG = logging.getLogger("granudep")
 
 
@@ -37,7 +39,6 @@ class Progress:
         return time.perf_counter() - self.t0
 
     def __call__(self, message_fn, final: bool = False) -> None:
-        from .signals import STOP
         if STOP.requested and self.on_stop is not None and not final:
             self.on_stop()
         now = time.perf_counter()
@@ -82,7 +83,6 @@ class BarProgress(Progress):
                         bar_format="{desc} {percentage:3.0f}%|{bar}| t = {n:.3f}/{total:.3f} s [{elapsed}<{remaining}]")
 
     def __call__(self, message_fn, final: bool = False) -> None:
-        from .signals import STOP
         if STOP.requested and self.on_stop is not None and not final:
             self.on_stop()
         if final:
@@ -104,7 +104,6 @@ class BarProgress(Progress):
 
 class _Silent(Progress):
     def __call__(self, message_fn, final: bool = False) -> None:
-        from .signals import STOP
         if STOP.requested and self.on_stop is not None and not final:
             self.on_stop()
 

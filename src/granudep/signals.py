@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import signal
 import threading
@@ -84,14 +85,13 @@ def graceful_stop(signals=HANDLED):
     if not _main_thread():
         yield STOP
         return
-    from .progress import LOG
     old = {s: signal.getsignal(s) for s in signals}
 
     def request(signum, frame):
         if STOP.requested:
             raise KeyboardInterrupt
         STOP.signum = signum
-        LOG.warning("%s received: stopping at the next output time (send it again to stop at once)",
+        logging.getLogger("granudep").warning("%s received: stopping at the next output time (send it again to stop at once)",
                     signal.Signals(signum).name)
 
     STOP.clear()

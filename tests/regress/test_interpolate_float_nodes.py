@@ -3,7 +3,7 @@ import pandas as pd
 import pytest
 
 from granudep.config import ConfigError
-from granudep.regress.coefficients import interpolate_ab
+from granudep.abtable import interpolate_ab
 
 
 def test_float_a_at_table_edge_node():

@@ -13,7 +13,8 @@ from granudep import cases
 from granudep.config import ConfigError
 from granudep.io import check_contract, provenance, var
 from granudep.regress.api import regress
-from granudep.regress.coefficients import coefficient_table, interpolate_ab
+from granudep.abtable import interpolate_ab
+from granudep.regress.coefficients import coefficient_table
 from granudep.regress.paper_tables import table3_comparison, table5_comparison
 from granudep.regress.config import RegressConfig
 from granudep.regress.critical import growth_fit, linear_fit, onset_time, value_at

@@ -10,18 +10,11 @@ from ..progress import LOG, make_progress
 from .checkpoint import Checkpointer, DAInterrupted
 from .config import DAConfig, resolve
 from .deposition import XInfResult, coefficients, self_consistent
+from .errors import DARunError
 from .output import to_dataset
 from .physics import earth_pressure_coefficients
 from .solver import AT_REST, RUNNING, Physics
 from .solver import simulate as _simulate
-
-
-class DARunError(RuntimeError):
-    """A run that blew up or left the domain; ``dataset`` holds everything written until then."""
-
-    def __init__(self, message: str, dataset: xr.Dataset | None = None):
-        super().__init__(message)
-        self.dataset = dataset
 
 
 def _k(cfg: DAConfig) -> tuple[float, float]:

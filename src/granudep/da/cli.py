@@ -92,17 +92,6 @@ def _convergence(args, cfg, deposition) -> int:
     return 0
 
 
-def _path_figure(args) -> int:
-    from ..config import ConfigError
-    from ..figures.path import path_figure
-    from ..io import save_figure
-    if len(args.runs) > 2:
-        raise ConfigError("path-figure: give one or two DA path runs (NetCDF)")
-    save_figure(path_figure(args.runs, args.exaggeration), args.output)
-    LOG.info("path figure written to %s", args.output)
-    return 0
-
-
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "da", help="run the 1D depth-averaged SPH model (Table 5 case or YAML), with or without deposition",
@@ -135,10 +124,3 @@ def register(subparsers) -> None:
                    help="progress: plain log lines (default), a tqdm bar, auto (bar in a terminal) or off")
     add_run_args(p, "numerics.cfl=0.3")
     p.set_defaults(func=_run)
-    q = subparsers.add_parser(
-        "path-figure", help="figure of DA runs on a path profile: bed, release, final deposit, travel angle, envelopes",
-        description="Profile figure of one or two `granudep da` runs with geometry.path (with/without deposition).")
-    q.add_argument("runs", nargs="+", metavar="RUN.nc", help="DA path runs of the same case")
-    q.add_argument("-o", "--output", required=True, metavar="OUT.png")
-    q.add_argument("--exaggeration", type=float, metavar="X", help="vertical exaggeration of the depths (default: auto)")
-    q.set_defaults(func=_path_figure)

@@ -5,7 +5,7 @@ The deposition *rate* and the transfer of volume to the fixed grid happen inside
 resolves what the kernel needs before a run:
 
 * A, B — ``paper``: Table 5 row of the case; ``user``: ``deposition.A``/``deposition.B``;
-  ``computed``: ``granudep.regress.coefficients.interpolate_ab`` on a coefficients.csv;
+  ``computed``: ``granudep.abtable.interpolate_ab`` on a coefficients.csv;
 * x∞ — ``user``: ``deposition.x_inf``; ``no-deposition``: the final front of the run without
   deposition; ``self-consistent`` (default): x∞ = x_front,final(x∞), solved by bracketing
   (Brent's method on g(x) = x_front,final(x) − x, bracket [x_front(x_nd), x_nd]), reporting the
@@ -34,7 +34,7 @@ def coefficients(cfg) -> tuple[float, float, str]:
             raise ConfigError(f"deposition.ab_source: 'paper' needs a Table 5 case name as `case` (got {cfg.case!r})")
         return float(row.iloc[0].A), float(row.iloc[0].B), f"paper (Table 5, {cfg.case})"
     try:
-        from ..regress.coefficients import interpolate_ab
+        from ..abtable import interpolate_ab
     except ImportError as exc:  # the regression stage is not installed
         raise ConfigError(f"deposition.ab_source: 'computed' needs granudep.regress.coefficients "
                           f"(not importable: {exc}); use 'paper' or 'user'") from None

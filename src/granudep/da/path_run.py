@@ -20,6 +20,7 @@ from ..config import ConfigError, to_yaml
 from ..front import flow_time
 from ..io import provenance, var
 from ..progress import LOG, Progress
+from .errors import DARunError
 from .path import Bed, bed_of
 from .physics import earth_pressure_coefficients
 from .path_solver import AT_REST, RUNNING, E_H, E_T, E_U, D_DEFICIT, D_LIFT, D_WHERE, PathSetup, bed_table, simulate_path
@@ -103,7 +104,7 @@ def path_coefficients(cfg, setup: PathSetup):
             raise ConfigError(f"geometry.path.ab_slope: 'local' needs deposition.ab_source 'computed' (a coefficient "
                               f"table to read at each slope; got ab_source {dep.ab_source!r})")
         return coefficients(cfg)
-    from ..regress.coefficients import interpolate_ab
+    from ..abtable import interpolate_ab
     a = setup.H0 / setup.L0
     if pc.ab_slope == "release":
         th = math.degrees(setup.theta_release)
@@ -140,7 +141,6 @@ class _Runner:
 
 def run_path(cfg, deposition: bool = True, bed: Bed | None = None) -> xr.Dataset:
     """The path counterpart of ``api.run_da`` (called by it when ``geometry.path`` is set)."""
-    from .api import DARunError
     from .deposition import XInfResult, self_consistent
     setup = path_setup(cfg, bed)
     runner = _Runner(cfg, setup, Progress(cfg.output.progress_every_s))

@@ -21,13 +21,9 @@ import numpy as np
 from ..config import ConfigError, build
 from . import analytic as an
 from .config import DAConfig, resolve
+from .verification_rows import row as _row
 
 TABLE5_RUN = {"case": "1D-A70", "numerics": {"n_particles": 300}, "output": {"dt_output": 0.05, "dx_grid": 2e-3}}
-
-
-def _row(*a):
-    from .verification import _row as row
-    return row(*a)
 
 
 def write_profile(path: Path, x, z, width=None, header=None) -> Path:

@@ -19,19 +19,12 @@ import numpy as np
 import pandas as pd
 
 from ..config import build
-from ..verification_gate import row_passed
 from . import analytic as an
 from .config import DAConfig
 from .physics import earth_pressure_coefficients
 from .solver import Physics, simulate
+from .verification_rows import COLUMNS, row as _row
 
-COLUMNS = ["check", "quantity", "value", "reference", "error", "tolerance", "passed", "note"]
-
-
-def _row(check, quantity, value, reference, error, tolerance, note):
-    return {"check": check, "quantity": quantity, "value": float(value), "reference": float(reference),
-            "error": float(error), "tolerance": float(tolerance), "passed": row_passed(error, tolerance),
-            "note": note}
 
 
 def _cfg(geometry, numerics, material=None, output=None, case="verify"):

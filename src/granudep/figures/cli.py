@@ -1,4 +1,5 @@
-"""CLI of the figures stage: ``figure NAME`` (one paper figure from the stage outputs)."""
+"""CLI of the figures stage: ``figure NAME`` (one paper figure from the stage outputs) and ``path-figure``
+(the profile figure of DA runs on a slope profile)."""
 from __future__ import annotations
 
 import argparse
@@ -20,6 +21,16 @@ def _cmd_figure(args) -> int:
     return 0
 
 
+def _cmd_path_figure(args) -> int:
+    from ..io import save_figure
+    from .path import path_figure
+    if len(args.runs) > 2:
+        raise ConfigError("path-figure: give one or two DA path runs (NetCDF)")
+    save_figure(path_figure(args.runs, args.exaggeration), args.output)
+    LOG.info("path figure written to %s", args.output)
+    return 0
+
+
 def register(sub) -> None:
     try:
         from . import FIGURES
@@ -33,6 +44,13 @@ def register(sub) -> None:
         fp.add_argument("-o", "--output", metavar="OUT.png", help="figure file (.png, .pdf, .svg)")
         spec.add_arguments(fp)
         fp.set_defaults(func=_cmd_figure)
+    q = sub.add_parser(
+        "path-figure", help="figure of DA runs on a path profile: bed, release, final deposit, travel angle, envelopes",
+        description="Profile figure of one or two `granudep da` runs with geometry.path (with/without deposition).")
+    q.add_argument("runs", nargs="+", metavar="RUN.nc", help="DA path runs of the same case")
+    q.add_argument("-o", "--output", required=True, metavar="OUT.png")
+    q.add_argument("--exaggeration", type=float, metavar="X", help="vertical exaggeration of the depths (default: auto)")
+    q.set_defaults(func=_cmd_path_figure)
 
 
 __all__ = ["register", "ConfigError"]
