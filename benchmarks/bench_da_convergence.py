@@ -21,8 +21,10 @@ W_min/dE and the largest energy rise between outputs (runs without deposition; `
 the Coulomb friction work can be no less than μ g Σ V Δx (horizontal displacements), so
 W_min / (E_0 − E_end) ≤ 1 unless the scheme created energy, and E never rises between outputs.
 
-docs/data/da_convergence.csv was made with ``--cases path --n-max 8000`` then ``--cases 1D-A70
---n-max 4000`` (docs/da-engineer-scale.md has the tables; ~20 CPU-min, most of it N = 8000).
+docs/data/da_convergence.csv holds one ladder per ``--label``: "strain" (the default earth pressure;
+``--cases 1D-A70`` then ``--cases path``, ``--n-min 1000 --n-max 8000``, about 40 CPU-min, most of it
+N = 8000) and the sign-switch variants measured before it ("particle switch", "symmetric switch");
+docs/da-engineer-scale.md has the tables.
 
 Converged N: the smallest N of the ladder whose runout differs < 1 % from that of 2N, and every
 later doubling too (so it needs at least two rows above it to be called); also printed: the
