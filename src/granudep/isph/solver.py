@@ -38,6 +38,7 @@ from ..cases import G
 from ..front import FRONT_MEASURE_DOC, front_from_profile, front_measures
 from ..progress import LOG, Progress
 from . import operators, ppe, shifting, viscous, walls
+from .bed import bed_law
 from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_work, viscous_dissipation
 from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
@@ -184,6 +185,7 @@ class IsphSolver:
         self.a_full = (reference_laplacian_sum(self.h, self.dx, self.eps2) / self.lap_norm
                        if c.numerics.kernel_completion else 0.0)
         self.slip = walls.SLIP_CODES[c.wall.slip]
+        self.bed = bed_law(self.slip)
         self.mean = viscous.MEAN_CODES[c.rheology.pair_mean]
         planes = [(0.0, 1.0, 0.0)] + ([(1.0, 0.0, 0.0)] if c.geometry.back_wall else [])
         self.planes = np.array(planes, dtype=float)
@@ -400,8 +402,8 @@ class IsphSolver:
         return apply_gradient(self.nf, *dmat, np.concatenate((self.p, self.p_wall)))
 
     def _predictor(self, nb: Pairs, geo: Geometry, dt: float, gp_old=None):
-        """Stage 3: the predictor u*, implicit in the viscous stress, with the Coulomb wall drag in its
-        diagonal and (``gp_old``, incremental) the old pressure impulse −Δt/ρ G pⁿ on its right-hand
+        """Stage 3: the predictor u*, implicit in the viscous stress, with the bed law's wall terms in its
+        diagonals (:mod:`.bed`) and (``gp_old``, incremental) the old pressure impulse −Δt/ρ G pⁿ on its right-hand
         side; books the viscous and wall-friction dissipation. Returns (u*, v*)."""
         c = self.cfg
         nf, rho = self.nf, self.rho
@@ -409,66 +411,7 @@ class IsphSolver:
                                                                  self.eta, self.gdot, self.wall_surface,
                                                                  walls.viscous_slip_code(self.slip), c.wall.slip_length, self.dx, dt, rho, self.eps2,
                                                                  self.mean, self.lap_norm, self.wall_norm)
-        wall_du = wall_dv = None
-        if self.slip in walls.FRICTION_LAWS:
-            diag_u = data[indptr[:-1]].copy()
-            wall_du, wall_dv = diag_u.copy(), diag_v.copy()
-            if self.reaction_friction:
-                if self.wall_an is None or self.wall_an.shape[0] != nf:
-                    self.wall_an = np.zeros((nf, self.planes.shape[0]))
-                self._reaction_drag(nb, dt, diag_u, diag_v)
-            else:
-                if c.wall.contact_length == "voronoi":
-                    clen = walls.contact_length(nb, nf, self.x, self.y, geo.contact, self.planes, self.dx)
-                else:
-                    clen = np.full(geo.contact.shape, self.dx)
-                walls.coulomb_wall_drag(nf, self.u, self.v, self.p_rheo, geo.contact, geo.col, self.planes,
-                                        self.mu_wall, self.gx, self.gy, rho, self.dx, dt, self.u_eps, diag_u, diag_v,
-                                        clen)
-            data[indptr[:-1]] = diag_u
-            wall_du = diag_u - wall_du
-            wall_dv = diag_v - wall_dv
-        elif self.slip in (walls.SLIP_NO, walls.SLIP_NAVIER):
-            # the viscous wall term's share of the diagonal (already in the matrix), for the booking
-            kns = walls.viscous_wall_drag(nb, nf, self.x, self.y, self.eta, self.wall_surface, self.planes,
-                                          self.slip, c.wall.slip_length, self.dx, rho, self.vol, self.eps2,
-                                          self.lap_norm, self.wall_norm)
-            scale = None
-            if (c.wall.bed_stress == "bed" and c.rheology.model == "mu_i" and self.reaction_friction
-                    and self.wall_an is not None and self.wall_an.shape[0] == nf):
-                # the μ(I) wall stress at the bed's normal stress p_w = ρ a_n dx, not the first
-                # layer's centre pressure (a sheet one particle thick held half its weight and slid on)
-                pw = rho * self.wall_an * self.dx
-                scale = np.where(self.wall_an > 0.0, np.maximum(pw / np.maximum(self.p_rheo, 1e-300)[:, None], 1.0), 1.0)
-            elif (c.wall.bed_stress == "wall" and c.rheology.model == "mu_i" and self.reaction_friction
-                    and self.wall_an is not None and self.wall_an.shape[0] == nf):
-                # the μ(I) stress evaluated at the wall itself: its normal stress p_w = ρ a_n dx and
-                # its own shear rate γ̇_w = τ_w/η = ρ dx (k_i/η_i) |u_t| (the wall term's geometry),
-                # so that τ_w = min(μ(I_w) p_w, η_max γ̇_w) whatever the particle's own strain rate
-                m, rh = c.material, c.rheology
-                pw = rho * self.wall_an * self.dx
-                eta_i = np.maximum(self.eta[:nf], 1e-300)[:, None]
-                ut = np.abs(np.outer(self.u[:nf], self.planes[:, 1]) - np.outer(self.v[:nf], self.planes[:, 0]))
-                gw = rho * self.dx * (kns / eta_i) * ut
-                iw = gw * m.d / np.sqrt(np.maximum(pw, 1e-300) / m.rho_s)
-                muw = m.mu_s + (m.mu_2 - m.mu_s) * iw / (m.I0_standard + iw)
-                eta_w = np.where(gw > 0.0, np.clip(muw * pw / np.maximum(gw, 1e-300), rh.eta_min, rh.eta_max), rh.eta_max)
-                scale = np.where((self.wall_an > 0.0) & (kns > 0.0), eta_w / eta_i, 1.0)
-            elif c.wall.bed_stress == "hydrostatic" and c.rheology.model == "mu_i":
-                # the first layer's pressure extrapolated to the wall plane, p_w = p_i + ρ g_n d_i
-                # (d_i: the particle's distance to the plane, g_n = max(−g·n, 0)): smooth in time
-                gn = np.maximum(-(self.gx * self.planes[:, 0] + self.gy * self.planes[:, 1]), 0.0)
-                dist = np.maximum(np.outer(self.x[:nf], self.planes[:, 0]) + np.outer(self.y[:nf], self.planes[:, 1])
-                                  - self.planes[:, 2], 0.0)
-                pi = np.maximum(self.p_rheo, 1e-300)[:, None]
-                scale = (pi + rho * gn * dist) / pi
-            if scale is not None:
-                extra = kns * (scale - 1.0)
-                data[indptr[:-1]] += dt * (extra @ (self.planes[:, 1] ** 2))
-                diag_v = diag_v + dt * (extra @ (self.planes[:, 0] ** 2))
-                kns = kns * scale
-            wall_du = dt * (kns @ (self.planes[:, 1] ** 2))
-            wall_dv = dt * (kns @ (self.planes[:, 0] ** 2))
+        diag_v, wall_du, wall_dv = self.bed.predictor_terms(self, nb, geo, dt, data, indptr, diag_v)
         # the velocity the viscous step starts from: uⁿ, less the old pressure impulse (incremental)
         u0, v0 = self.u, self.v
         if gp_old is not None:
@@ -503,25 +446,6 @@ class IsphSolver:
             # the wall's share: its diagonal increments times u*² (the drag's work)
             eb.wall_friction += self.m * float(np.dot(wall_du, us * us) + np.dot(wall_dv, vs * vs))
         return us, vs
-
-    def _reaction_drag(self, nb: Pairs, dt: float, diag_u, diag_v) -> None:
-        """The bed law's traction from the walls' normal reaction, added to the viscous diagonals
-        (``wall.slip``: coulomb, mu_w_i or stress_limited; :mod:`.walls`)."""
-        c, nf = self.cfg, self.nf
-        if self.slip == walls.SLIP_COULOMB:
-            walls.coulomb_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, self.mu_wall, dt,
-                                             self.u_eps, diag_u, diag_v)
-        elif self.slip == walls.SLIP_MU_W_I:
-            m = c.material
-            walls.mu_w_i_drag_from_reaction(nf, self.u, self.v, self.wall_an, self.planes, m.mu_s, m.mu_2, m.I0_standard, m.d,
-                                            m.rho_s, self.rho, self.dx, c.wall_shear_length, dt, self.u_eps,
-                                            diag_u, diag_v)
-        else:
-            kns = walls.viscous_wall_drag(nb, nf, self.x, self.y, self.eta, self.wall_surface, self.planes,
-                                          walls.SLIP_NO, 0.0, self.dx, self.rho, self.vol, self.eps2, self.lap_norm,
-                                          self.wall_ns)
-            walls.stress_limited_drag(nf, self.u, self.v, kns, self.p_rheo, self.wall_an, self.planes, self.mu_wall,
-                                      self.dx, dt, self.rho, self.u_eps, diag_u, diag_v)
 
     def _start_ppe_geometry(self, nb: Pairs, dmat, overlap: bool = False):
         """Stage 2c (adjoint pair): what the projection's PPE needs before u* is known
