@@ -6,7 +6,8 @@ model and the path model alike (one home for each formula).
 1. ``neighbours.insertion_sort`` by position, ``smoothing_length`` L_s (eq 25 generalised, or fixed);
 2. stage 1 at (x^n, u^n): ``sph.evaluate_into`` (depth eq 20 with mirror ghosts, gradients eqs 21–22
    and 28–29, XSPH sum eq 33; with ``k_symmetric`` the pair-form earth-pressure gradient
-   ``sph.symmetric_pressure_gradient``), the deposit gradient (deposit as bed), ``bed_terms`` (g sinθ, g cosθ,
+   ``sph.symmetric_pressure_gradient``, with k from the strained state ``strained_k`` when
+   ``k_strain`` > 0), the deposit gradient (deposit as bed), ``bed_terms`` (g sinθ, g cosθ,
    k of eqs 8–9, Coulomb friction tanφ_B N⁺ with N = g cosθ + κu², depth = area / width — all read
    from the bed table: a path, or two equal stations for a constant θ);
 3. ``time_step``: eq 32 (``absolute``) or the Lagrangian ``relative`` rule of the path model;
@@ -15,6 +16,7 @@ model and the path model alike (one home for each formula).
 5. ``predictor``: ũ = u^n + Δt a^n (Coulomb-limited), x̃ = x^n + Δt u^n;
 6. stage 2 at (x̃, ũ): the same operators and ``bed_terms``;
 7. ``corrector``: RK2 eqs 30–31 with the Heun friction budget, XSPH eq 33, mirror at the wall;
+   the strained k^{n+1} from the mean of the two stages' ∂u/∂s;
 8. ``mark_envelopes`` (path outputs), then ``commit``: positions, velocities, and the deposited
    volume from the particles onto the grid (flowing + deposited volume conserved to round-off).
 

@@ -76,15 +76,15 @@ class IsphBlowUp(RuntimeError):
 
 class Geometry(NamedTuple):
     """Per-step geometry shared by the stages: concentration, ∇C, renormalisation matrices and their
-    diagonal, wall contact (planes, columns), detachment."""
+    diagonal, wall contact (planes, columns) and detachment (None where no stage reads them)."""
     conc: np.ndarray
     gcx: np.ndarray
     gcy: np.ndarray
     lmat: np.ndarray
     mdiag: tuple
-    contact: np.ndarray
-    col: np.ndarray
-    detached: np.ndarray
+    contact: np.ndarray | None
+    col: np.ndarray | None
+    detached: np.ndarray | None
 
 
 @dataclass
@@ -340,14 +340,19 @@ class IsphSolver:
         return pairs_of(self.x, self.y, self.nf, self.radius, self.period, self.h)
 
     def _geometry(self, nb: Pairs) -> Geometry:
-        """Stage 1b: kernel values, ∇·r, concentration, renormalisation, free surface, wall contact."""
+        """Stage 1b: kernel values, ∇·r, concentration, renormalisation, free surface, and the wall
+        contact where a stage reads it (else None)."""
         c = self.cfg
         nf, h = self.nf, self.h
         divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(nb, nf, h, self.vol)
         self.fs = divr < c.numerics.free_surface_threshold
-        contact, col = walls.wall_contact(nb, nf, self.x, self.y, self.planes, self.dx, h,
-                                          c.wall.cover_offset * self.dx)
-        detached = walls.detached_from_walls(contact, 0.75 * self.dx)
+        contact = col = detached = None
+        if c.numerics.projection == "approximate" or (self.slip in walls.FRICTION_LAWS and not self.reaction_friction):
+            # the wall contact is read only by the approximate projection (detachment) and by the
+            # Coulomb drag from the contact pressure (:class:`.bed.FrictionWall` without the reaction)
+            contact, col = walls.wall_contact(nb, nf, self.x, self.y, self.planes, self.dx, h,
+                                              c.wall.cover_offset * self.dx)
+            detached = walls.detached_from_walls(contact, 0.75 * self.dx)
         return Geometry(conc, gcx, gcy, lmat, mdiag, contact, col, detached)
 
     def _rheology(self, nb: Pairs, geo: Geometry) -> None:
