@@ -6,6 +6,7 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from granudep.isph import linear_systems as linear_mod
 from granudep.isph import solver as solver_mod
 from granudep.isph.api import run_isph
 from granudep.isph.config import load_config
@@ -85,12 +86,12 @@ def test_solver_falls_back_to_direct_on_an_indefinite_matrix(method):
     indptr, indices, data = _indefinite()
     n = indptr.size - 1
     b = np.random.default_rng(2).standard_normal(n)
-    x = s._solve_cg(indptr, indices, data, b, np.zeros(n), "ppe", method=method)
+    x = s.linear.solve_cg(indptr, indices, data, b, np.zeros(n), "ppe", method=method)
     dic = method == "dic"
     exact = spla.spsolve(_dense(indptr, indices, data).tocsc(), b)
     assert s.stats.fallbacks == 1
     assert np.abs(x - exact).max() < 1e-9 * np.abs(exact).max()
-    xu, xv = s._solve_cg_pair(indptr, indices, data, data[indptr[:-1]] + 10.0, b, b, b, b, dic=dic)
+    xu, xv = s.linear.solve_cg_pair(indptr, indices, data, data[indptr[:-1]] + 10.0, b, b, b, b, dic=dic)
     assert s.stats.fallbacks == 2  # the u system only
     assert np.abs(xu - exact).max() < 1e-9 * np.abs(exact).max()
 
@@ -126,7 +127,7 @@ def test_solver_nan_rhs_falls_back_and_the_nan_then_stops_the_run(monkeypatch, t
 def test_run_survives_a_cg_failure_and_counts_it(monkeypatch, mode, projection, cg, solver):
     """The PPE CG fails once (planted: a breakdown code, a ZeroDivisionError or a NaN solution) at
     step 4: the step is solved by SuperLU and the run goes on; the output counts one fallback."""
-    real = getattr(solver_mod, cg)
+    real = getattr(linear_mod, cg)
     calls = [0]
 
     def planted(*a):
@@ -139,7 +140,7 @@ def test_run_survives_a_cg_failure_and_counts_it(monkeypatch, mode, projection, 
                 return np.full_like(x, np.nan), it, 0
             return x, it, BREAKDOWN
         return real(*a)
-    monkeypatch.setattr(solver_mod, cg, planted)
+    monkeypatch.setattr(linear_mod, cg, planted)
     projection, _, operator = projection.partition("/")
     ds = run_isph("T22-A70", dx=0.01, t_end=0.05, **{"numerics.projection": projection,
                                                      "numerics.pressure_solver": solver,
@@ -156,7 +157,7 @@ def test_singular_direct_solve_is_a_blow_up_not_a_crash():
     indices = np.array([0, 1, 1, 0])
     data = np.array([1.0, 1.0, 1.0, 1.0])  # [[1, 1], [1, 1]]: exactly singular
     with pytest.raises(IsphBlowUp, match="direct solver failed"):
-        s._solve_cg(indptr, indices, data, np.array([1.0, 0.0]), np.zeros(2), "ppe", method="dic")
+        s.linear.solve_cg(indptr, indices, data, np.array([1.0, 0.0]), np.zeros(2), "ppe", method="dic")
     assert s.stats.fallbacks == 1
 
 

@@ -22,7 +22,7 @@ Return convention: (x, iterations, info) with info = 0 on convergence, ``maxiter
 non-positive incomplete-Cholesky pivot, ``BREAKDOWN`` (-2) for a curvature p·Ap that is not
 positive (zero, negative or NaN: A singular or indefinite), a zero or non-positive ρ = r·z or a
 zero diagonal, and ``NONFINITE`` (-3) for a right-hand side with NaN/inf; x is then the last
-finite iterate (or x0). The caller (``IsphSolver._solve_cg``) falls back to the direct solver.
+finite iterate (or x0). The caller (``linear_systems.LinearSystems.solve_cg``) falls back to the direct solver.
 """
 from __future__ import annotations
 

@@ -31,8 +31,6 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..cases import G
 from ..front import FRONT_MEASURE_DOC, front_from_profile, front_measures
@@ -44,10 +42,9 @@ from .config import IsphConfig
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
 from .projection import (adjoint_divergence, adjoint_pair_geometry, adjoint_pair_projection, apply_gradient,
                          divergence_entries, wall_normal_acceleration)
-from .deflation import pcg_ssor_deflated
-from .linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pcg_two_level,
-                       pcg_two_level_free,
-                       pin_blas_to_one_thread)
+from .errors import IsphBlowUp
+from .linear_systems import LinearSystems
+from .linsolve import pin_blas_to_one_thread
 from .bundles import Pairs, WallSurface, pairs_of
 from .heap import keep_freed_memory
 from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
@@ -64,14 +61,6 @@ def _ppe_thread() -> ThreadPoolExecutor:
     if _PPE_THREAD is None:
         _PPE_THREAD = ThreadPoolExecutor(max_workers=1, thread_name_prefix="granudep-ppe")
     return _PPE_THREAD
-
-
-class IsphBlowUp(RuntimeError):
-    """A run that produced NaN or lost a particle; ``dataset`` holds the snapshots so far."""
-
-    def __init__(self, message: str, dataset=None):
-        super().__init__(message)
-        self.dataset = dataset
 
 
 class Geometry(NamedTuple):
@@ -122,16 +111,6 @@ class SolverStats:
     clamped: int = 0
     fallbacks: int = 0
     walls_released: int = 0
-
-
-def _solve_direct(indptr, indices, data, rhss):
-    n = indptr.size - 1
-    # symmetric matrices: the CSR arrays are also the CSC arrays
-    # SuperLU needs sorted row indices (the kernels put the diagonal first); sorted_indices()
-    # works on a copy so the caller's arrays stay in kernel order
-    a = sp.csc_matrix((data, indices, indptr), shape=(n, n)).sorted_indices()
-    lu = spla.splu(a, permc_spec="MMD_AT_PLUS_A")
-    return [lu.solve(b) for b in rhss]
 
 
 class IsphSolver:
@@ -197,6 +176,7 @@ class IsphSolver:
         self.t = 0.0
         self.step_no = 0
         self.stats = SolverStats()
+        self.linear = LinearSystems(self)
         self.dt = 0.0
         # domain box for escape checks
         self.xmin = -0.5 * self.dx if c.geometry.back_wall else -math.inf
@@ -425,8 +405,8 @@ class IsphSolver:
         if c.numerics.viscous_solver == "direct":
             data_v = data.copy()
             data_v[indptr[:-1]] = diag_v
-            us = self._direct(indptr, indices, data, u0 + dt * self.gx, "viscous (u)")
-            vs = self._direct(indptr, indices, data_v, v0 + dt * self.gy, "viscous (v)")
+            us = self.linear.direct(indptr, indices, data, u0 + dt * self.gx, "viscous (u)")
+            vs = self.linear.direct(indptr, indices, data_v, v0 + dt * self.gy, "viscous (v)")
         else:
             bu = u0 + dt * self.gx
             bv = v0 + dt * self.gy
@@ -439,7 +419,7 @@ class IsphSolver:
                 f = dt / self.visc_dt
                 xu0 = bu + f * self.visc_du
                 xv0 = bv + f * self.visc_dv
-            us, vs = self._solve_cg_pair(indptr, indices, data, diag_v, bu, bv, xu0, xv0, dic=dic)
+            us, vs = self.linear.solve_cg_pair(indptr, indices, data, diag_v, bu, bv, xu0, xv0, dic=dic)
             self.visc_du = us - bu
             self.visc_dv = vs - bv
             self.visc_dt = dt
@@ -468,7 +448,7 @@ class IsphSolver:
         if self.wall_dry is None or self.wall_dry.size != nw:
             self.wall_dry = np.zeros(nw, dtype=bool)
         args = (nb, nf, nw, self.vol, self.fs, self.p_fs, self.eps2, self.lap_norm,
-                self.cfg.numerics.projection_stabilisation, self.wall_dry, dmat, self._ppe_form == "triangles")
+                self.cfg.numerics.projection_stabilisation, self.wall_dry, dmat, self.linear.ppe_form == "triangles")
         if overlap:
             return _ppe_thread().submit(adjoint_pair_geometry, *args)
         return adjoint_pair_geometry(*args)
@@ -543,7 +523,7 @@ class IsphSolver:
             pi, pj, pd, rhs = ppe.assemble_ppe(nb, nf, vol, unknown, n_unknown, p_new, div,
                                                us, vs, conc, self.c0, self.density_relaxation(dt), self.wall_surface, dt,
                                                rho, self.eps2, self.a_full, self.lap_norm)
-            p_new[interior] = self._solve_ppe(pi, pj, pd, rhs, self.p[interior])
+            p_new[interior] = self.linear.solve_ppe(pi, pj, pd, rhs, self.p[interior])
         self.p = p_new
         gpx, gpy = operators.pressure_gradient(nb, nf, vol, self.p, us, vs, lmat_p, self.wall_surface,
                                                dt, rho, detached)
@@ -561,9 +541,9 @@ class IsphSolver:
         p, gpx, gpy, self.wall_dry, released = adjoint_pair_projection(
             nb, nf, nw, self.vol, lmat_p, self.wall_surface, self.fs, self.p_fs, us, vs, conc, self.c0,
             self.density_relaxation(dt), dt, self.rho, self.eps2, self.lap_norm,
-            c.numerics.projection_stabilisation, guess, self._solve_ppe, self.wall_dry,
+            c.numerics.projection_stabilisation, guess, self.linear.solve_ppe, self.wall_dry,
             release=c.numerics.wall_release, entries=dmat,
-            solve_free=self._solve_ppe_free if self._ppe_form != "csr" else None, free_form=self._ppe_form,
+            solve_free=self.linear.solve_ppe_free if self.linear.ppe_form != "csr" else None, free_form=self.linear.ppe_form,
             geometry=ppe_geo)
         self.stats.walls_released += released
         self.p = p[:nf]
@@ -623,148 +603,6 @@ class IsphSolver:
         self.y[:nf] = self.y[:nf][perm]
         self._take_rows(perm)
         self.permuted = True
-
-    def _solve_ppe(self, indptr, indices, data, rhs, guess):
-        if self.cfg.numerics.pressure_solver == "direct":
-            return self._direct(indptr, indices, data, rhs, "ppe")
-        if self.cfg.numerics.pressure_solver.startswith("amg_"):
-            return self._solve_amg(indptr, indices, data, rhs, guess)
-        # the adjoint-pair operator (1 − ε) D Dᵀ + ε L_c is only semi-definite up to ε L_c and has
-        # positive off-diagonal entries: incomplete Cholesky (modified or not) meets non-positive
-        # pivots on it (Newtonian film, ε = 0.01: every step); its preconditioned solver is the
-        # two-level CG (Jacobi + aggregation coarse space, iterations independent of dx)
-        solver = self.cfg.numerics.pressure_solver
-        if solver == "cg_dic" and self.cfg.numerics.projection == "adjoint_pair":
-            solver = "cg_ssor"     # SSOR-CG on the triangles
-        return self._solve_cg(indptr, indices, data, rhs, guess, "ppe",
-                              method={"cg_dic": "dic", "cg_two_level": "two_level", "cg_ssor": "ssor"}.get(solver,
-                                                                                                        "jacobi"))
-
-    @property
-    def _ppe_form(self) -> str:
-        """How the adjoint-pair PPE reaches its solver: ``csr`` (assembled), ``free`` (matrix-free,
-        ``numerics.ppe_operator``) or ``triangles`` (``cg_ssor``: the SSOR sweeps' two triangles)."""
-        n = self.cfg.numerics
-        if n.pressure_solver in ("cg_ssor", "cg_dic"):     # cg_dic: SSOR on the adjoint pair
-            return "triangles"
-        return "free" if n.ppe_operator == "matrix_free" else "csr"
-
-    def _solve_ppe_free(self, op, rhs, guess, assemble):
-        """The adjoint-pair PPE as a matrix-free operator (two-level CG) or as its two triangles
-        (SSOR-CG, deflated by an aggregation coarse space from ``numerics.deflation_min_unknowns``
-        unknowns on: :mod:`.deflation`); the assembled matrix by SuperLU if it fails (:meth:`_solve_cg`)."""
-        rtol = self.cfg.numerics.solver_rtol
-        try:
-            if len(op) == 7:
-                sol, it, info = pcg_ssor_deflated(*op, rhs, guess, rtol, 0.0, 1000,
-                                                  self.cfg.numerics.deflation_min_unknowns)
-            else:
-                sol, it, info = pcg_two_level_free(op, rhs, guess, rtol, 0.0, 1000)
-        except (ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError) as exc:
-            sol, it, info = guess, 0, BREAKDOWN
-            LOG.warning("isph %s: ppe CG raised %r", self.cfg.case, exc)
-        self.stats.ppe_iters += it
-        why = self._why(info, sol)
-        if why is not None:
-            return self._fallback(*assemble(), rhs, "ppe", why)
-        return sol
-
-    def _direct(self, indptr, indices, data, rhs, kind):
-        """SuperLU; a singular matrix stops the run as a blow-up (partial output kept)."""
-        try:
-            return _solve_direct(indptr, indices, data, [rhs])[0]
-        except (RuntimeError, ValueError, ZeroDivisionError) as exc:
-            raise IsphBlowUp(f"{kind} linear system: direct solver failed ({exc}) at t={self.t:.5f} s, "
-                             f"step {self.step_no}") from exc
-
-    def _fallback(self, indptr, indices, data, rhs, kind, why):
-        """Direct solve of a system whose CG broke down or did not converge,
-        counted in ``stats.fallbacks`` (run file attribute ``linear_solver_fallbacks``)."""
-        self.stats.fallbacks += 1
-        if self.stats.fallbacks <= 10:
-            LOG.warning("isph %s: %s CG %s at t=%.5f s, step %d: direct solve for this step", self.cfg.case, kind,
-                        why, self.t, self.step_no)
-        return self._direct(indptr, indices, data, rhs, kind)
-
-    @staticmethod
-    def _why(info, sol):
-        if info == NONFINITE:
-            return "right-hand side not finite"
-        if info == BREAKDOWN:
-            return "breakdown (zero/negative curvature or NaN)"
-        if info == -1:
-            return "incomplete Cholesky breakdown (non-positive pivot)"
-        if info > 0:
-            return f"not converged in {info} iterations"
-        if not np.isfinite(sol).all():
-            return "returned a non-finite solution"
-        return None
-
-    def _solve_amg(self, indptr, indices, data, rhs, guess):
-        """AMG-preconditioned CG (:mod:`.amg`, pyamg), with the direct fallback of :meth:`_solve_cg`."""
-        from .amg import amg_pcg
-        try:
-            sol, it, info = amg_pcg(indptr, indices, data, rhs, guess, self.cfg.numerics.solver_rtol, 200,
-                                    self.cfg.numerics.pressure_solver[4:])
-        except (ArithmeticError, ValueError, RuntimeError) as exc:
-            sol, it, info = guess, 0, BREAKDOWN
-            LOG.warning("isph %s: ppe AMG raised %r", self.cfg.case, exc)
-        self.stats.ppe_iters += it
-        why = self._why(info, sol)
-        if why is not None:
-            return self._fallback(indptr, indices, data, rhs, "ppe", why)
-        return sol
-
-    def _solve_cg(self, indptr, indices, data, rhs, guess, kind, method="jacobi"):
-        """CG, warm-started: Jacobi-preconditioned (numba, :mod:`.linsolve`: scipy's cg iteration
-        bit for bit), DIC-preconditioned (``method="dic"``) or two-level (``"two_level"``: Jacobi +
-        aggregation coarse space); SuperLU if it breaks down, raises, returns a non-finite solution
-        or does not converge in 1000 iterations."""
-        rtol = self.cfg.numerics.solver_rtol
-        try:
-            if method in ("dic", "ssor"):
-                sol, it, info = pcg_dic(indptr, indices, data, rhs, guess, rtol, 0.0, 1000,
-                                        -1.0 if method == "ssor" else self.cfg.numerics.ic_modification)
-            elif method == "two_level":
-                sol, it, info = pcg_two_level(indptr, indices, data, rhs, guess, rtol, 0.0, 1000)
-            else:
-                sol, it, info = pcg_jacobi(indptr, indices, data, rhs, guess, rtol, 0.0, 1000)
-        except (ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError) as exc:
-            sol, it, info = guess, 0, BREAKDOWN
-            LOG.warning("isph %s: %s CG raised %r", self.cfg.case, kind, exc)
-        if kind == "ppe":
-            self.stats.ppe_iters += it
-        else:
-            self.stats.visc_iters += it
-        why = self._why(info, sol)
-        if why is not None:
-            return self._fallback(indptr, indices, data, rhs, kind, why)
-        return sol
-
-    def _solve_cg_pair(self, indptr, indices, data, diag_v, bu, bv, xu0, xv0, dic=False):
-        """The u and v viscous systems (same off-diagonal, own diagonals) by Jacobi- or DIC-CG in
-        lock-step, warm-started from xu0, xv0; SuperLU for one that does not converge."""
-        rtol = self.cfg.numerics.solver_rtol
-        try:
-            if dic:
-                xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol,
-                                                              0.0, 1000, self.cfg.numerics.ic_modification)
-            else:
-                xu, itu, infou, xv, itv, infov = pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0,
-                                                                 rtol, 0.0, 1000)
-        except (ZeroDivisionError, FloatingPointError) as exc:
-            xu, itu, infou, xv, itv, infov = xu0, 0, BREAKDOWN, xv0, 0, BREAKDOWN
-            LOG.warning("isph %s: viscous CG raised %r", self.cfg.case, exc)
-        self.stats.visc_iters += itu + itv
-        why = self._why(infou, xu)
-        if why is not None:
-            xu = self._fallback(indptr, indices, data, bu, "viscous (u)", why)
-        why = self._why(infov, xv)
-        if why is not None:
-            data_v = data.copy()
-            data_v[indptr[:-1]] = diag_v
-            xv = self._fallback(indptr, indices, data_v, bv, "viscous (v)", why)
-        return xu, xv
 
     def _check(self) -> None:
         """NaN anywhere, or a particle through the bed, back wall or top: IsphBlowUp. A finite
