@@ -203,6 +203,9 @@ def main() -> None:
         keys = ["variant", "case", "deposition", "n", "runout", "change_prev", "flow_time", "steps", "wall_s",
                 "cpu_s", "at_rest", "energy_ratio", "energy_rise", "n_rises", "max_speed", "L_s_final", "x_inf", "converged_n", "near_finest_n"]
         new = not args.csv.exists()
+        if not new:  # append in the existing file's column order (a file written by an older version
+            with args.csv.open(newline="") as f:  # of this script may order its columns differently)
+                keys = next(csv.reader(f))
         with args.csv.open("a", newline="") as f:
             wr = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
             if new:
