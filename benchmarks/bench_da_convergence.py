@@ -82,6 +82,9 @@ def one_run(cfg: dict, deposition: bool, x_inf: float | None):
             "runout": float(ds.final_runout), "flow_time": float(ds.flow_time), "steps": int(ds.attrs["n_steps"]),
             "wall_s": wall, "cpu_s": cpu, "at_rest": int(ds.attrs["at_rest"]), "front": front,
             "x_inf_user": front, "max_speed": float(abs(ds.u).max()),
+            # the 1 % volume front's runout (constant slope only): steadier than the 2 d front on thin deposits
+            "runout_v99": (float(ds.final_front_v99) - float(ds.attrs["L0"])) if "final_front_v99" in ds
+            and "L0" in ds.attrs else float("nan"),
             "L_s_final": float(ds.smoothing_length[-1])}
 
 
@@ -160,7 +163,8 @@ def main() -> None:
                     r = one_run(cfg, dep, x_inf)
                     r.update(case=case, deposition=int(dep), n=n, variant=args.label)
                     rows.append(r)
-                    print(f"  {case} {'dep' if dep else 'nodep'} N = {n}: runout {r['runout']:.4f} m, flow time "
+                    print(f"  {case} {'dep' if dep else 'nodep'} N = {n}: runout {r['runout']:.4f} m "
+                          f"(1 % volume front: {r['runout_v99']:.4f} m), flow time "
                           f"{r['flow_time']:.3f} s, {r['steps']} steps, wall {r['wall_s']:.2f} s, CPU {r['cpu_s']:.2f} s, "
                           f"energy ratio {r['energy_ratio']:.4f}, largest rise {r['energy_rise']:.2e} ({r['n_rises']} rises), max |u| {r['max_speed']:.2f} m/s"
                           f"{'' if r['at_rest'] else ' (NOT at rest)'}", flush=True)
@@ -200,17 +204,18 @@ def main() -> None:
                 print(flush=True)
     if args.csv:
         args.csv.parent.mkdir(parents=True, exist_ok=True)
-        keys = ["variant", "case", "deposition", "n", "runout", "change_prev", "flow_time", "steps", "wall_s",
+        keys = ["variant", "case", "deposition", "n", "runout", "runout_v99", "change_prev", "flow_time", "steps", "wall_s",
                 "cpu_s", "at_rest", "energy_ratio", "energy_rise", "n_rises", "max_speed", "L_s_final", "x_inf", "converged_n", "near_finest_n"]
-        new = not args.csv.exists()
-        if not new:  # append in the existing file's column order (a file written by an older version
-            with args.csv.open(newline="") as f:  # of this script may order its columns differently)
-                keys = next(csv.reader(f))
-        with args.csv.open("a", newline="") as f:
+        old_rows = []
+        if args.csv.exists():  # keep the file's rows and column order (an older version of this script
+            with args.csv.open(newline="") as f:  # may have written other columns, or in another order)
+                rd = csv.DictReader(f)
+                keys = list(rd.fieldnames) + [k for k in keys if k not in rd.fieldnames]
+                old_rows = list(rd)
+        with args.csv.open("w", newline="") as f:
             wr = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
-            if new:
-                wr.writeheader()
-            wr.writerows(rows_all)
+            wr.writeheader()
+            wr.writerows(old_rows + rows_all)
     if args.figure:
         plot(args.csv if args.csv else None, rows_all, args.figure)
 
