@@ -181,17 +181,24 @@ def particle_k(x, du, tab, p, k):
 
 
 @njit(cache=True)
-def strained_k(x, V, k0, du_a, du_b, wa, wb, dt, tab, p, k):
-    """k of each particle after the strain −(wa ∂u/∂s_a + wb ∂u/∂s_b) Δt from k0
-    (``physics.earth_pressure_strained``, limits k_a, k_p at its station); Δt = 0 clips k0 only."""
+def strained_k(x, V, k0, du, dt, tab, p, k):
+    """k of each particle after the strain −∂u/∂s Δt from k0 (``physics.earth_pressure_strained``,
+    limits k_a, k_p at its station); Δt = 0 clips k0 only."""
     ns = tab.shape[1]
     for i in range(x.shape[0]):
         if V[i] <= 0.0:
             k[i] = k0[i]
             continue
         kk, w = locate(x[i] + p.origin, p.ds, ns)
-        k[i] = earth_pressure_strained(k0[i], wa * du_a[i] + wb * du_b[i], dt, table_at(tab, T_KACT, kk, w),
+        k[i] = earth_pressure_strained(k0[i], du[i], dt, table_at(tab, T_KACT, kk, w),
                                        table_at(tab, T_KPASS, kk, w), p.k_strain)
+
+
+@njit(cache=True)
+def stage_mean(a, b, out):
+    """out = ½ a + ½ b (the Heun mean of two stages' rates)."""
+    for i in range(a.shape[0]):
+        out[i] = 0.5 * a[i] + 0.5 * b[i]
 
 
 @njit(cache=True)
@@ -518,7 +525,7 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         # stage 1 at (x^n, u^n)
         E = evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h1, nd1, dh1, du1, xs1, E)
         if strain:
-            strained_k(x, V, F[F_K], du1, du1, 0.0, 0.0, 0.0, tab, p, kp)
+            strained_k(x, V, F[F_K], du1, 0.0, tab, p, kp)
             strained_wave_factor(x, tab, p, wf)
             symmetric_pressure_gradient(x, L, qc, wall, xe, Ve, he, lo, hi, E, kp, ke, dh1, kb1)
         elif p.k_symmetric:
@@ -541,7 +548,7 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         # stage 2 at (x̃, ũ)
         E = evaluate_into(xt, ut, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h2, nd2, dh2, du2, xs2, E)
         if strain:
-            strained_k(xt, V, kp, du1, du1, 1.0, 0.0, dt, tab, p, ks)
+            strained_k(xt, V, kp, du1, dt, tab, p, ks)
             symmetric_pressure_gradient(xt, L, qc, wall, xe, Ve, he, lo, hi, E, ks, ke, dh2, kb2)
         elif p.k_symmetric:
             particle_k(xt, du2, tab, p, kp)
@@ -555,7 +562,8 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         if status != RUNNING:
             return t, nsteps, status, order[i], L, dt
         if strain:  # k^{n+1}: the Heun mean of the two stages' strain rates
-            strained_k(xn, V, kp, du1, du2, 0.5, 0.5, dt, tab, p, F[F_K])
+            stage_mean(du1, du2, ks)
+            strained_k(xn, V, kp, ks, dt, tab, p, F[F_K])
         t_new = t_target if last else t + dt
         mark_envelopes(env, x, xn, h1, un, V, t_new, p.dx_grid, p.front_threshold)
         umax = commit(x, F, xn, un, fr, dep, depb, binv, p, order, own)
