@@ -113,7 +113,7 @@ def sliding_layer(law: str, dx: float = 0.002, t_end: float = 0.5) -> dict:
     shearing. Reports the mean deceleration over ``t_end`` and the basal slip (mean speed of the
     particles within dx of the bed over the layer's mean speed) at t_end/2 and t_end."""
     from granudep.isph.config import load_config
-    from granudep.isph.solver import IsphSolver
+    from granudep.isph.stepper import IsphSolver
     from granudep.isph.verification import advance, layer_config
 
     cfg = load_config(layer_config(22.0, 0.02, dx, wall={k.split(".")[1]: v for k, v in LAWS[law].items()}))

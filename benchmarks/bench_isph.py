@@ -40,7 +40,7 @@ import time
 
 from granudep.isph.api import run_isph, warmup
 from granudep.isph.config import load_config
-from granudep.isph.solver import IsphSolver
+from granudep.isph.stepper import IsphSolver
 
 
 def per_step(case: str, dx: float, steps: int, solver: str) -> dict:

@@ -83,7 +83,7 @@ def refine(coarse, cfg):
     to t = 0.3 s costs ~2000 steps of 60 000 particles, hours on the shared machine), from the 4 mm
     state after t_flow of flow, and relaxed for ``RELAX`` steps: a developed velocity field on a
     locally regular lattice."""
-    from granudep.isph.solver import IsphSolver
+    from granudep.isph.stepper import IsphSolver
     s = IsphSolver(cfg)
     nc = coarse.nf
     if 4 * nc != s.nf:
@@ -108,7 +108,7 @@ RELAX = 50
 def checkpoint(case: str, dx: float, t_flow: float):
     """IsphSolver of ``case`` at dx after t_flow seconds of flow (default numerics), cached. At dx
     below 4 mm: the checkpoint at 2 dx refined (:func:`refine`) and relaxed for RELAX steps."""
-    from granudep.isph.solver import IsphSolver
+    from granudep.isph.stepper import IsphSolver
     CACHE.mkdir(parents=True, exist_ok=True)
     path = CACHE / f"{case}_dx{dx * 1e3:g}mm_t{t_flow:g}.pkl"
     if path.exists():

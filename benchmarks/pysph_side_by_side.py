@@ -80,7 +80,7 @@ def pysph_ms_per_step(py: Path, home: Path, scheme: str, dx: float, tf_a: float,
 def granudep_ms_per_step(case: str, n_target: int, solver: str, steps: int) -> dict:
     import math
     from granudep.isph.config import load_config
-    from granudep.isph.solver import IsphSolver
+    from granudep.isph.stepper import IsphSolver
     from granudep.isph.verification import dam_break_config
     over = {"numerics.pressure_solver": solver.split("/")[0]}
     if "/" in solver:

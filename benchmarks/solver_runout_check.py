@@ -27,7 +27,8 @@ from granudep.cliutil import parse_sets
 def one_run(case: str, dx: float, seed: int, overrides: dict) -> dict:
     from granudep.isph.config import load_config
     from granudep.isph.output import build_dataset
-    from granudep.isph.solver import IsphSolver, run
+    from granudep.isph.stepper import IsphSolver
+    from granudep.isph.run import run
     from granudep.progress import Progress
     cfg = load_config(case, dx=dx, progress_every_s=1e9, **overrides)
     s = IsphSolver(cfg)

@@ -107,9 +107,9 @@ def basilisk_run(runs: Path, name: str) -> tuple[dict, pd.DataFrame, pd.DataFram
 
 def granudep_measures(nc: Path) -> tuple[dict, pd.DataFrame, tuple[np.ndarray, np.ndarray]]:
     """The same measures from a granudep run file: the depth profile of every snapshot by
-    granudep's own binning (isph.solver.surface_profile: bed cells of width dx, max y + dx/2)."""
+    granudep's own binning (isph.profile.surface_profile: bed cells of width dx, max y + dx/2)."""
     from granudep.io import open_dataset
-    from granudep.isph.solver import surface_profile
+    from granudep.isph.profile import surface_profile
     ds = open_dataset(nc)
     dx = float(ds.attrs["dx"])
     x = ds["x"].transpose("time", "particle").values

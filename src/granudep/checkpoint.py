@@ -5,8 +5,8 @@ file + rename, :func:`granudep.io.atomic_path`) at most every ``every_s`` wall s
 SIGTERM/SIGINT asks for a stop. It records the run's identity (the resolved config as YAML and the
 granudep version, :func:`identity`); a restart from a file of another run, a missing or an
 unreadable file is refused with one line naming ``--restart``. The stages keep what the state is:
-:mod:`granudep.da.checkpoint` (finished simulations + the running one), :mod:`granudep.isph.solver`
-(the solver and the time loop's state, :class:`granudep.isph.solver.RunState`).
+:mod:`granudep.da.checkpoint` (finished simulations + the running one), :mod:`granudep.isph.run`
+(the solver and the time loop's state, :class:`granudep.isph.run.RunState`).
 """
 from __future__ import annotations
 

@@ -12,7 +12,7 @@ from granudep.config import ConfigError
 from granudep.isph import walls
 from granudep.isph.analysis import moving_share, time_to_rest_mass_share
 from granudep.isph.config import load_config
-from granudep.isph.solver import IsphSolver
+from granudep.isph.stepper import IsphSolver
 from granudep.isph.verification import advance, layer_config
 
 MU_S, MU_2, I0, D, RHO_S = math.tan(math.radians(25.5)), math.tan(math.radians(32.76)), 0.279, 7e-4, 2500.0

@@ -2,7 +2,7 @@
 import threadpoolctl
 
 from granudep.isph.config import load_config
-from granudep.isph.solver import IsphSolver
+from granudep.isph.stepper import IsphSolver
 
 
 def test_solver_runs_blas_on_one_thread():
@@ -15,7 +15,7 @@ def test_solver_runs_blas_on_one_thread():
 def test_a_run_resumed_from_a_state_pins_blas_too(monkeypatch):
     """A checkpointed solver is unpickled, not constructed: run() pins the BLAS itself."""
     import granudep.isph.linsolve as ls
-    from granudep.isph.solver import RunState, Snapshots, run
+    from granudep.isph.run import RunState, Snapshots, run
     cfg = load_config("T22-A70", **{"numerics.dx": 0.02, "numerics.t_end": 0.005})
     s = IsphSolver(cfg)
     threadpoolctl.threadpool_limits(limits=2, user_api="blas")

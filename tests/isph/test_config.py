@@ -46,7 +46,7 @@ def test_yaml_user_case(tmp_path):
 def test_density_relaxation_per_time_scales_the_weight_with_the_step():
     """per_time: the weight is γ Δt/Δt_ref (Δt_ref the gravity cap), so the relaxation rate per unit
     time does not depend on Δt; per_step: γ at any Δt."""
-    from granudep.isph.solver import IsphSolver
+    from granudep.isph.stepper import IsphSolver
     s = IsphSolver(load_config("T22-A70", dx=0.02, **{"numerics.density_relaxation_form": "per_time"}))
     ref = s.gravity_step()
     assert abs(ref - 0.125 * (s.h / 9.81) ** 0.5) < 1e-15

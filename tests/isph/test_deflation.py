@@ -170,7 +170,7 @@ def test_solver_uses_the_deflated_cg_from_the_threshold_on():
     follows the SSOR-CG run within the solver tolerance amplified by the flow (as the cg / cg_dic
     comparison of test_linsolve does), in fewer PPE iterations."""
     from granudep.isph.config import load_config
-    from granudep.isph.solver import IsphSolver
+    from granudep.isph.stepper import IsphSolver
     out = {}
     for name, k in (("ssor", 10 ** 9), ("deflated", 0)):
         s = IsphSolver(load_config("T22-A70", dx=0.01, **{"numerics.deflation_min_unknowns": k}))

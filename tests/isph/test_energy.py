@@ -5,7 +5,8 @@ import scipy.sparse as sp
 
 from granudep.isph.config import load_config
 from granudep.isph.energy import kinetic_energy, potential_energy, viscous_dissipation
-from granudep.isph.solver import IsphBlowUp, IsphSolver
+from granudep.isph.errors import IsphBlowUp
+from granudep.isph.stepper import IsphSolver
 
 
 def test_viscous_dissipation_is_the_work_of_the_operator():

@@ -7,12 +7,13 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from granudep.isph import linear_systems as linear_mod
-from granudep.isph import solver as solver_mod
+from granudep.isph import stepper
 from granudep.isph.api import run_isph
 from granudep.isph.config import load_config
 from granudep.isph.linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi,
                                     pcg_jacobi_pair)
-from granudep.isph.solver import IsphBlowUp, IsphSolver
+from granudep.isph.errors import IsphBlowUp
+from granudep.isph.stepper import IsphSolver
 
 from test_linsolve import _particle_matrix
 
@@ -99,7 +100,7 @@ def test_solver_falls_back_to_direct_on_an_indefinite_matrix(method):
 def test_solver_nan_rhs_falls_back_and_the_nan_then_stops_the_run(monkeypatch, tmp_path):
     """A NaN in the PPE right-hand side at step 3: counted fallback, the direct solve's NaN pressure
     stops the run as a blow-up (not a crash) with the partial output written."""
-    real = solver_mod.ppe.assemble_ppe
+    real = stepper.ppe.assemble_ppe
     calls = [0]
 
     def planted(*a):
@@ -109,7 +110,7 @@ def test_solver_nan_rhs_falls_back_and_the_nan_then_stops_the_run(monkeypatch, t
             rhs = rhs.copy()
             rhs[len(rhs) // 2] = np.nan
         return pi, pj, pd, rhs
-    monkeypatch.setattr(solver_mod.ppe, "assemble_ppe", planted)
+    monkeypatch.setattr(stepper.ppe, "assemble_ppe", planted)
     out = tmp_path / "nan.nc"
     with pytest.raises(IsphBlowUp, match="non-finite"):
         run_isph("T22-A70", output=out, dx=0.01, t_end=0.05, **{"numerics.projection": "approximate"})

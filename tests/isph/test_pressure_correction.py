@@ -7,7 +7,7 @@ import pytest
 from granudep.config import ConfigError
 from granudep.isph import operators
 from granudep.isph.config import load_config
-from granudep.isph.solver import IsphSolver
+from granudep.isph.stepper import IsphSolver
 from granudep.isph.verification import advance, layer_config
 
 

@@ -8,7 +8,7 @@ import xarray as xr
 from granudep.cli import main
 from granudep.io import open_dataset
 from granudep.isph.api import run_isph
-from granudep.isph.solver import IsphBlowUp
+from granudep.isph.errors import IsphBlowUp
 
 CONTRACT_VARS = ["x", "y", "u", "v", "pressure", "viscosity", "free_surface", "front_position",
                  "kinetic_energy", "final_front_position", "time_to_rest"]
@@ -85,7 +85,7 @@ def test_downstream_outflow_removes_particles_and_is_not_a_blow_up(tmp_path, cap
 
 def test_escape_through_bed_or_nan_is_still_a_blow_up():
     from granudep.isph.config import load_config
-    from granudep.isph.solver import IsphSolver
+    from granudep.isph.stepper import IsphSolver
     cfg = load_config("T22-A70", dx=0.02, domain_length=0.3)
     s = IsphSolver(cfg)
     n0, walls = s.nf, s.x[s.nf:].copy()
@@ -127,7 +127,7 @@ def test_renumbering_keeps_the_particle_identity_in_the_outputs():
     snapshots are indexed by the original particle, so the two runs agree particle by particle up to
     the round-off of the different summation order (0.1 s of collapse: 2e-8 m, float32 snapshots)."""
     from granudep.isph.config import load_config
-    from granudep.isph.solver import run
+    from granudep.isph.run import run
     runs = {}
     for k in (0, 1):
         cfg = load_config("T22-A70", dx=0.01, t_end=0.1, **{"numerics.reorder_interval": k})

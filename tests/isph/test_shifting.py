@@ -5,7 +5,7 @@ from granudep.isph import operators, shifting
 from granudep.isph import verification as v
 from granudep.isph.config import load_config
 from granudep.isph.bundles import Pairs, pairs_of
-from granudep.isph.solver import IsphSolver
+from granudep.isph.stepper import IsphSolver
 
 
 def _layer(dx):

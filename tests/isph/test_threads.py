@@ -14,7 +14,7 @@ import json, sys
 import numba
 import numpy as np
 from granudep.isph.config import load_config
-from granudep.isph.solver import IsphSolver
+from granudep.isph.stepper import IsphSolver
 s = IsphSolver(load_config("T22-A70", dx=0.01, **{"numerics.reorder_interval": 5,
                                                    "numerics.threads_mode": sys.argv[2]}))
 for _ in range(40):
@@ -24,9 +24,9 @@ for _ in range(40):
 np.savez(sys.argv[1], x=s.x, y=s.y, u=s.u, v=s.v, p=s.p, eta=s.eta, fs=s.fs, ids=s.ids)
 from granudep.isph import operators
 builds = {b: len(getattr(operators.geometry_terms, b).signatures) for b in ("serial", "parallel")}
-from granudep.isph import solver
+from granudep.isph import stepper
 print(json.dumps({"threads": numba.get_num_threads(), "ppe": s.stats.ppe_iters, "visc": s.stats.visc_iters,
-                  "builds": builds, "ppe_thread": solver._PPE_THREAD is not None}))
+                  "builds": builds, "ppe_thread": stepper._PPE_THREAD is not None}))
 """
 
 

@@ -13,7 +13,8 @@ from ..signals import STOP, RunInterrupted
 from .checkpoint import IsphCheckpointer
 from .config import IsphConfig, load_config
 from .output import build_dataset
-from .solver import IsphBlowUp, run
+from .errors import IsphBlowUp
+from .run import run
 
 
 class IsphInterrupted(IsphBlowUp, RunInterrupted):

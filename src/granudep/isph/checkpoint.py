@@ -1,6 +1,6 @@
 """Checkpoint/restart of ISPH runs (long runs survive interruption).
 
-The state of a run is one :class:`granudep.isph.solver.RunState`: the solver (particle arrays in
+The state of a run is one :class:`granudep.isph.run.RunState`: the solver (particle arrays in
 their current renumbering, ``ids``, the warm-start arrays ``visc_du``/``visc_dv``/``visc_dt``,
 ``p_wall``/``wall_dry``/``wall_an``, statistics, energy budget, outflow record), the snapshots so
 far and the time loop's counters (next output time, rest detection, status). It is pickled after a

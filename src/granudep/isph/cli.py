@@ -12,7 +12,7 @@ def _cmd_isph(args) -> int:
     from ..signals import graceful_stop
     from .api import IsphInterrupted, run_config
     from .config import load_config
-    from .solver import IsphBlowUp
+    from .errors import IsphBlowUp
     cfg = load_config(args.case, dx=args.dx, t_end=args.t_end, **parse_sets(args.set))
     out = Path(args.output) if args.output else Path("results/isph") / f"{cfg.case}.nc"
     apply_threads(args.threads)

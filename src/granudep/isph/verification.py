@@ -15,7 +15,8 @@ from ..cases import G
 from ..verification_gate import row_passed
 from .config import load_config
 from .layer_reference import bagnold_initial, uniform_layer
-from .solver import IsphSolver, step_towards
+from .stepper import IsphSolver
+from .run import step_towards
 
 COLUMNS = ["check", "quantity", "value", "reference", "error", "tolerance", "passed", "note"]
 
@@ -356,7 +357,8 @@ def dam_break(quick: bool = False, projection: str | None = None, resolutions=No
     2 sqrt(g H) (the inviscid shallow-water value; reported: real surges are slower, and the
     dam-break measurements themselves are not in this repository). ``projection``: the
     ``numerics.projection`` under test (None: the default; the check name carries any other)."""
-    from .solver import IsphBlowUp, run
+    from .errors import IsphBlowUp
+    from .run import run
     from ..progress import Progress
     rows = []
     name = "dam_break" if projection is None else f"dam_break_{projection}"

@@ -1,4 +1,5 @@
-"""Projection ISPH driver: owns the particle state, the time loop, the linear solves and output.
+"""The step recipe of the projection ISPH: one time step as a short list of named stages, on the
+particle state of :mod:`.state` (the time loop is :mod:`.run`).
 
 One step (Cummins & Rudman 1999; Shao & Lo 2003; Lind et al. 2012), all per-particle work in the
 numba kernels of :mod:`granudep.isph.operators`, :mod:`~granudep.isph.walls`,
@@ -26,29 +27,27 @@ from __future__ import annotations
 import math
 import time as _time
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numba
 import numpy as np
 
 from ..cases import G
-from ..front import FRONT_MEASURE_DOC, front_from_profile, front_measures
-from ..progress import LOG, Progress
 from . import operators, ppe, shifting, viscous, walls
 from .bed import bed_law
-from .energy import EnergyBudget, kinetic_energy, potential_energy, pressure_work, viscous_dissipation
+from .bundles import Pairs, WallSurface, pairs_of
 from .config import IsphConfig
-from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
-from .projection import (adjoint_divergence, adjoint_pair_geometry, adjoint_pair_projection, apply_gradient,
-                         divergence_entries, wall_normal_acceleration)
+from .energy import kinetic_energy, potential_energy, pressure_work, viscous_dissipation
 from .errors import IsphBlowUp
+from .heap import keep_freed_memory
 from .linear_systems import LinearSystems
 from .linsolve import pin_blas_to_one_thread
-from .bundles import Pairs, WallSurface, pairs_of
-from .heap import keep_freed_memory
-from .setup import (Particles, build_particles, lattice_constants, reference_concentration,
-                    reference_laplacian_sum)
+from .projection import (adjoint_divergence, adjoint_pair_geometry, adjoint_pair_projection, apply_gradient,
+                         divergence_entries, wall_normal_acceleration)
+from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
+from .setup import Particles, lattice_constants, reference_concentration, reference_laplacian_sum
+from .state import ParticleState
 
 
 #: the thread that builds the PPE geometry beside the predictor (:meth:`IsphSolver._start_ppe_geometry`),
@@ -77,28 +76,6 @@ class Geometry(NamedTuple):
 
 
 @dataclass
-class Snapshots:
-    time: list = field(default_factory=list)
-    fields: dict = field(default_factory=lambda: {k: [] for k in
-                                                  ("x", "y", "u", "v", "pressure", "viscosity", "free_surface")})
-    front: list = field(default_factory=list)
-    kinetic: list = field(default_factory=list)
-    area: list = field(default_factory=list)
-    max_speed: list = field(default_factory=list)
-    steps: list = field(default_factory=list)
-    energy: dict = field(default_factory=lambda: {k: [] for k in ENERGY_TERMS})
-    fronts: dict = field(default_factory=lambda: {k: [] for k in FRONT_MEASURE_DOC})
-
-
-#: the per-particle state besides the positions, one row per granular particle: what the renumbering
-#: (:meth:`IsphSolver._reorder`) permutes and the outflow (:meth:`IsphSolver._remove`) filters
-PARTICLE_FIELDS = ("u", "v", "p", "eta", "gdot", "fs", "p_rheo", "visc_du", "visc_dv", "ids", "wall_an")
-
-#: energy terms stored per snapshot (J m-1), see :mod:`.energy`
-ENERGY_TERMS = ("potential", "dissipated", "wall_friction", "projection", "shifting", "clamps", "outflow")
-
-
-@dataclass
 class SolverStats:
     steps: int = 0
     wall_s: float = 0.0
@@ -113,46 +90,27 @@ class SolverStats:
     walls_released: int = 0
 
 
-class IsphSolver:
-    """State + stepping for one configuration."""
+class IsphSolver(ParticleState):
+    """The particle state with the scheme's constants and the step recipe for one configuration."""
 
     def __init__(self, cfg: IsphConfig, particles: Particles | None = None):
         pin_blas_to_one_thread()
         keep_freed_memory()
-        self.cfg = cfg
         c = cfg
         if c.numerics.pressure_solver.startswith("amg_"):
             from .amg import have_pyamg
             if not have_pyamg():
                 raise ImportError(f"numerics.pressure_solver: {c.numerics.pressure_solver} needs the optional "
                                   "package pyamg (pip install pyamg, or the [amg] extra)")
-        self.parts = particles if particles is not None else build_particles(cfg)
-        P = self.parts
-        self.nf = P.nf
-        self.x = P.x.copy()
-        self.y = P.y.copy()
-        nf = self.nf
-        self.u = np.zeros(nf)
-        self.v = np.zeros(nf)
+        super().__init__(cfg, particles)
         th = c.theta
-        self.gx = G * math.sin(th)
-        self.gy = -G * math.cos(th)
-        self.rho = c.material.rho
-        self.dx = c.numerics.dx
         self.h = c.h
-        self.vol = self.dx * self.dx
         self.eps2 = 0.01 * self.h * self.h
         self.radius = 2.0 * self.h
-        self.period = c.geometry.periodic_length
-        # lithostatic initial pressure (used by the rheology of the first step only)
-        self.p = np.maximum(self.rho * G * math.cos(th) * (c.geometry.H0 - self.y[:nf]), 0.0)
-        self.eta = np.full(nf, c.rheology.eta_max if c.rheology.model == "mu_i" else c.rheology.viscosity)
-        self.gdot = np.zeros(nf)
         self.grad = None
         self.p_floor = (0.5 * self.rho * G * math.cos(th) * self.dx
                         if c.rheology.model == "mu_i" and c.rheology.pressure_floor == "half_layer" else 0.0)
         self.p_fs = 0.5 * self.rho * G * math.cos(th) * self.dx if c.numerics.free_surface_pressure == "half_layer" else 0.0
-        self.fs = np.zeros(nf, dtype=bool)
         self.c0 = reference_concentration(self.h, self.dx)
         lc = lattice_constants(c.numerics.h_factor, 0.01, c.wall_layers)
         # wall_ns: the no-slip wall stress norm (the stress-limited law's rigid bed); wall_norm: the
@@ -173,35 +131,11 @@ class IsphSolver:
         self.plane_hi = np.array([math.inf] + ([math.inf] if c.geometry.back_wall else []))
         self.u_eps = c.wall.stick_speed
         self.mu_wall = math.tan(math.radians(c.wall.phi_basal_deg))
-        self.t = 0.0
-        self.step_no = 0
         self.stats = SolverStats()
         self.linear = LinearSystems(self)
-        self.dt = 0.0
-        # domain box for escape checks
-        self.xmin = -0.5 * self.dx if c.geometry.back_wall else -math.inf
-        self.xmax = c.domain_length if self.period <= 0 else math.inf
-        self.ymin = -0.5 * self.dx
-        self.ymax = c.geometry.H0 + max(1.0, 5.0 * c.geometry.H0)
-        # downstream outflow: particles past x = xmax leave the computation (see _check); the
-        # state arrays then hold the n_active particles still in the domain, ``ids`` their
-        # original indices; snapshots keep all n0 particles (those gone frozen where they left)
-        self.outflow = bool(c.geometry.outflow) and self.period <= 0
-        self.n0 = nf
-        self.ids = np.arange(nf)
-        self.outflow_time = np.full(nf, np.nan)
-        self.exit_x = np.full(nf, np.nan)
-        self.exit_y = np.full(nf, np.nan)
-        self.outflow_log: list[tuple] = []      # (particle, t, step, y, speed) per departure
-        # particle renumbering (:meth:`_reorder`) every ``reorder_interval`` steps; ``permuted``:
-        # the arrays are no longer in the original order (``ids`` maps them back)
-        self.reorder_interval = c.numerics.reorder_interval
-        self.x_origin = float(self.x.min()) - 0.5 * self.dx
-        self.permuted = False
         self.visc_du = None                     # previous viscous increment (cg_dic warm start)
         self.visc_dv = None
         self.visc_dt = 0.0
-        self.m = self.rho * self.vol
         rh, m = c.rheology, c.material
         if rh.regularisation == "barker_gray_2017":
             i_n1 = ill_posed_bounds(m.mu_s, m.mu_2, rh.mu_inf, m.I0_standard)[0]
@@ -209,16 +143,10 @@ class IsphSolver:
                         regularisation_constant(i_n1, m.mu_s, m.mu_2, rh.mu_inf, m.I0_standard, rh.alpha_reg))
         else:
             self.reg = (0.0, rh.alpha_reg, 1.0)
-        self.energy = EnergyBudget(
-            e0=potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy),
-            e_ref=max(self.m * G * math.cos(th) * float(np.sum(self.y[:nf])), 1e-300))
-        self.e_mech = self.energy.e0
-        self.nf_at_energy = nf
         self.p_wall = None                      # adjoint_pair: wall-node pressures
         self.wall_dry = None                    # adjoint_pair: wall nodes held at p = 0 (released)
         self.wall_an = None                     # adjoint_pair: wall-normal reaction per particle and plane
 
-    # ------------------------------------------------------------------------------------------
     @property
     def wall_surface(self) -> WallSurface:
         """The wall particles' surface normals and offsets (the bundle the kernels take)."""
@@ -570,310 +498,3 @@ class IsphSolver:
                              f"step {self.step_no} (limit numerics.energy_limit = "
                              f"{100 * self.cfg.numerics.energy_limit:g} %; largest gain: {worst} "
                              f"{stages[worst] / eb.e_ref * 100:+.2f} %)")
-
-    def mechanical_energy(self) -> float:
-        """E_kin + E_pot of the particles in the domain."""
-        nf = self.nf
-        return (kinetic_energy(self.m, self.u, self.v)
-                + potential_energy(self.m, self.x[:nf], self.y[:nf], self.gx, self.gy))
-
-    def _take_rows(self, index) -> None:
-        """Permute (an index array) or filter (a mask) every per-particle array of PARTICLE_FIELDS
-        present with one row per granular particle (the positions are handled by the callers)."""
-        nf = self.nf
-        for name in PARTICLE_FIELDS:
-            a = getattr(self, name, None)
-            if a is not None and np.ndim(a) >= 1 and a.shape[0] == nf:
-                setattr(self, name, a[index])
-
-    def _reorder(self) -> None:
-        """Renumber the granular particles in natural order: columns of width dx (down-slope), by
-        height within a column, as the initial lattice is numbered. The flow mixes the numbering,
-        which slows the (M)IC preconditioner, the triangular sweeps and the neighbour loops
-        (T22-A70 at 4 mm, mid-run: 4.47 -> 3.68 ms per step with a renumbering every 10 steps);
-        numbering by the 2h cells of the neighbour search instead doubled the PPE iterations.
-        Every per-particle array is permuted; ``ids`` keeps the original index of each particle
-        (outputs are written in that order, see :meth:`full`)."""
-        nf = self.nf
-        col = np.floor((self.x[:nf] - self.x_origin) / self.dx)
-        perm = np.lexsort((self.y[:nf], col))
-        if np.array_equal(perm, np.arange(nf)):
-            return
-        self.x[:nf] = self.x[:nf][perm]
-        self.y[:nf] = self.y[:nf][perm]
-        self._take_rows(perm)
-        self.permuted = True
-
-    def _check(self) -> None:
-        """NaN anywhere, or a particle through the bed, back wall or top: IsphBlowUp. A finite
-        particle past the downstream end of the bed (x > domain_length) with ``geometry.outflow``
-        leaves through the outflow (:meth:`_remove`), which is not a failure."""
-        nf = self.nf
-        bad = ~(np.isfinite(self.u) & np.isfinite(self.v) & np.isfinite(self.p))
-        if bad.any():
-            k = int(np.flatnonzero(bad)[0])
-            raise IsphBlowUp(f"non-finite velocity/pressure at t={self.t:.5f} s, step {self.step_no}, "
-                             f"particle {int(self.ids[k])} at (x, y) = ({self.x[k]:.4f}, {self.y[k]:.4f}) m")
-        x, y = self.x[:nf], self.y[:nf]
-        inside_y = (y >= self.ymin) & (y <= self.ymax)
-        if self.outflow:
-            gone = (x > self.xmax) & np.isfinite(x) & inside_y
-            if gone.any():
-                self._remove(gone)
-                nf = self.nf
-                x, y = self.x[:nf], self.y[:nf]
-        out = (x < self.xmin) | (x > self.xmax) | (y < self.ymin) | (y > self.ymax) | ~np.isfinite(x) | ~np.isfinite(y)
-        if out.any():
-            k = int(np.flatnonzero(out)[0])
-            x, y = x.copy(), y.copy()
-            k_id = int(self.ids[k])
-            raise IsphBlowUp(f"particle {k_id} left the domain at t={self.t:.5f} s, step {self.step_no}: "
-                             f"(x, y) = ({x[k]:.4f}, {y[k]:.4f}) m outside x in [{self.xmin:.4f}, {self.xmax:.4f}],"
-                             f" y in [{self.ymin:.4f}, {self.ymax:.4f}]")
-
-    def _remove(self, gone: np.ndarray) -> None:
-        """Take the granular particles ``gone`` (mask over the active ones) out of the computation:
-        they passed the downstream end of the bed. Their exit time and place are kept; the wall
-        particles (stored after the granular ones) are untouched."""
-        nf = self.nf
-        idx = np.flatnonzero(gone)
-        keep = ~gone
-        orig = self.ids[idx]
-        self.outflow_time[orig] = self.t
-        self.exit_x[orig] = self.x[idx]
-        self.exit_y[orig] = self.y[idx]
-        speed = np.hypot(self.u[idx], self.v[idx])
-        self.energy.outflow += (kinetic_energy(self.m, self.u[idx], self.v[idx])
-                                + potential_energy(self.m, self.x[idx], self.y[idx], self.gx, self.gy))
-        for k, i in enumerate(orig):
-            self.outflow_log.append((int(i), self.t, self.step_no, float(self.y[idx[k]]), float(speed[k])))
-            if len(self.outflow_log) <= 20:
-                LOG.warning("isph %s: particle %d left through the downstream outflow (x = %.3f m) at t=%.5f s, "
-                            "step %d, y = %.4f m, speed %.3f m/s", self.cfg.case, i, self.xmax, self.t,
-                            self.step_no, self.y[idx[k]], speed[k])
-            elif len(self.outflow_log) == 21:
-                LOG.warning("isph %s: further outflow departures are counted, not logged", self.cfg.case)
-        self.x = np.concatenate([self.x[:nf][keep], self.x[nf:]])
-        self.y = np.concatenate([self.y[:nf][keep], self.y[nf:]])
-        self._take_rows(keep)
-        self.nf = int(keep.sum())
-
-    def full(self, a: np.ndarray, fill: float = 0.0) -> np.ndarray:
-        """A per-particle array of the active particles spread over all n0 original particles
-        (``fill`` for those gone through the outflow)."""
-        if self.nf == self.n0 and not self.permuted:
-            return a
-        out = np.full(self.n0, fill, dtype=a.dtype)
-        out[self.ids] = a
-        return out
-
-    @property
-    def n_outflow(self) -> int:
-        return self.n0 - self.nf
-
-    # ------------------------------------------------------------------------------------------
-    def kinetic_energy(self) -> float:
-        return float(0.5 * self.rho * self.vol * np.sum(self.u ** 2 + self.v ** 2))
-
-    def mass_speed(self, front: float, measure: str = "rms") -> float:
-        """Max or root-mean-square speed of the granular particles behind the front (x <= front)."""
-        if self.nf == 0:
-            return 0.0
-        sel = self.x[:self.nf] <= front if math.isfinite(front) else np.ones(self.nf, bool)
-        if not sel.any():
-            sel = np.ones(self.nf, bool)
-        sp2 = self.u[sel] ** 2 + self.v[sel] ** 2
-        return float(np.sqrt(np.max(sp2) if measure == "max" else np.mean(sp2)))
-
-    def max_speed(self) -> float:
-        return float(np.sqrt(np.max(self.u ** 2 + self.v ** 2))) if self.nf else 0.0
-
-    def front(self) -> float:
-        """Front: granular particles binned into bed-parallel cells of width dx; cell depth =
-        max y + dx/2 (0 if empty; gaps of <= 2 empty cells closed); then the shared front rule
-        (first cell thinner than threshold)."""
-        return front_position(self.x[:self.nf], self.y[:self.nf], self.dx, self.cfg.front_depth_threshold,
-                              self.cfg.domain_length)
-
-
-def step_towards(dt: float, remaining: float) -> float:
-    """Time step that lands on a target time ``remaining`` ahead without a sliver step: the last
-    two steps before it share the remainder. A sliver (Δt → 0) would blow up the projection
-    pressure, which scales like (ρ/Δt) ∇·u* (the divergence left in uⁿ divided by Δt): with the
-    snapshot times cut into the CFL steps, T22-A70 at dx = 4 mm saw pressures 10³ ρ g H0 at the
-    bed, which the μ(I) law (η = μ p/|γ̇|) and the Coulomb wall friction (μ_B p) then used."""
-    if remaining <= dt * (1.0 + 1e-9):
-        return remaining
-    if remaining < 2.0 * dt:
-        return 0.5 * remaining
-    return dt
-
-
-def front_position(x: np.ndarray, y: np.ndarray, dx: float, threshold: float, length: float) -> float:
-    edges, depth = surface_profile(x, y, dx, length)
-    return front_from_profile(edges, depth, threshold)
-
-
-def area_ratio(x: np.ndarray, y: np.ndarray, dx: float, length: float) -> float:
-    """Area under the binned surface profile / (N dx²): the bulk-volume conservation measure of the
-    run (1 = the particles fill exactly their volume; < 1 = the mass compressed or particles
-    clumped). Each particle carries dx², so mass is conserved by construction; this is the error
-    of the incompressibility constraint (thin layers, where every particle is a free-surface
-    particle without a pressure equation, are where it is lost)."""
-    if x.size == 0:
-        return float("nan")
-    edges, depth = surface_profile(x, y, dx, length)
-    return float(depth.sum() * dx / (x.size * dx * dx))
-
-
-def surface_profile(x: np.ndarray, y: np.ndarray, dx: float, length: float):
-    """Bed cells of width dx (edges) and the depth of the granular mass in each: max y + dx/2."""
-    ncell = int(math.ceil(length / dx)) + 1
-    edges = np.arange(ncell + 1) * dx
-    idx = np.clip((x / dx).astype(np.int64), 0, ncell - 1)
-    depth = np.zeros(ncell)
-    np.maximum.at(depth, idx, y + 0.5 * dx)
-    # close gaps of at most two empty cells (2 dx < the kernel support 2h: the particles on either
-    # side still interact): a thin deposit one or two particles thick has such gaps, which moved the
-    # front of T22-A70 at dx = 8 mm back and forth between 0.55 and 1.11 m after rest
-    left = np.maximum(np.concatenate([[0.0], depth[:-1]]), np.concatenate([[0.0, 0.0], depth[:-2]]))
-    right = np.maximum(np.concatenate([depth[1:], [0.0]]), np.concatenate([depth[2:], [0.0, 0.0]]))
-    depth = np.where(depth > 0.0, depth, np.minimum(left, right))
-    return edges, depth
-
-
-@dataclass
-class RunState:
-    """Everything the time loop of :func:`run` carries from one step to the next: the solver (particles,
-    warm-start arrays, statistics, energy budget), the snapshots so far and the loop's counters. A
-    checkpoint (:mod:`.checkpoint`) is this object pickled after a step; :func:`run` given it
-    continues exactly where it stood."""
-    solver: IsphSolver
-    snaps: Snapshots
-    next_out: float
-    rest_since: float | None = None
-    started: bool = False
-    time_to_rest: float = float("nan")
-    status: str = "t_end reached"
-    done: bool = False
-
-
-def run(cfg: IsphConfig, on_snapshot=None, progress: Progress | None = None, solver: IsphSolver | None = None,
-        checkpoint=None):
-    """Advance to rest or t_end, storing snapshots every ``output.dt_output``.
-
-    Returns (solver, snapshots, status, time_to_rest). Raises IsphBlowUp with the partial
-    snapshots attached (``exc.snapshots``) on NaN or escape. ``checkpoint``
-    (:class:`.checkpoint.IsphCheckpointer`): its ``resume()`` gives a :class:`RunState` to continue,
-    its ``after_step(state, at_output)`` is called after every step (it writes the checkpoint file
-    when due, and at an output time when SIGTERM/SIGINT asked for a stop).
-    """
-    out = cfg.output
-    pin_blas_to_one_thread()     # also for a solver unpickled from a checkpoint (no __init__)
-    keep_freed_memory()
-    st = checkpoint.resume() if checkpoint is not None else None
-    resumed = st is not None
-    if st is None:
-        st = RunState(solver if solver is not None else IsphSolver(cfg), Snapshots(), out.dt_output)
-    s, snaps = st.solver, st.snaps
-    t_end = cfg.t_end
-    progress = progress or Progress(out.progress_every_s)
-    tol = 1e-9
-
-    def snap():
-        # every snapshot holds all n0 particles: those gone through the outflow sit where they left
-        # (x = domain length) at rest, with p = 0 and free_surface = 1
-        nf = s.nf
-        snaps.time.append(s.t)
-        f = snaps.fields
-        xs, ys = s.x[:nf], s.y[:nf]
-        if nf < s.n0 or s.permuted:
-            xs = s.exit_x.copy()
-            xs[s.ids] = s.x[:nf]
-            ys = s.exit_y.copy()
-            ys[s.ids] = s.y[:nf]
-        f["x"].append(xs.astype(np.float32))
-        f["y"].append(ys.astype(np.float32))
-        f["u"].append(s.full(s.u).astype(np.float32))
-        f["v"].append(s.full(s.v).astype(np.float32))
-        f["pressure"].append(s.full(s.p).astype(np.float32))
-        f["viscosity"].append(s.full(s.eta).astype(np.float32))
-        f["free_surface"].append(s.full(s.fs, True).astype(np.int8))
-        edges, depth = surface_profile(s.x[:nf], s.y[:nf], s.dx, cfg.domain_length)
-        snaps.front.append(front_from_profile(edges, depth, cfg.front_depth_threshold))
-        for k, val in front_measures(edges, depth, cfg.material.d).items():
-            snaps.fronts[k].append(val)
-        snaps.kinetic.append(s.kinetic_energy())
-        eb = s.energy
-        e_pot = potential_energy(s.m, s.x[:nf], s.y[:nf], s.gx, s.gy) if s.period <= 0 else float("nan")
-        for k, val in (("potential", e_pot), ("dissipated", eb.dissipated), ("wall_friction", eb.wall_friction),
-                       ("projection", eb.projection),
-                       ("shifting", eb.shifting), ("clamps", eb.clamps), ("outflow", eb.outflow)):
-            snaps.energy[k].append(val)
-        snaps.area.append(area_ratio(s.x[:nf], s.y[:nf], s.dx, cfg.domain_length))
-        snaps.max_speed.append(s.max_speed())
-        snaps.steps.append(s.step_no)
-        if on_snapshot is not None:
-            on_snapshot(s, snaps)
-
-    def message():
-        el = max(s.stats.wall_s, 1e-9)
-        return (f"isph {cfg.case}: t={s.t:.4f} s ({s.t / cfg.t_c:.2f} t_c), steps={s.step_no}, "
-                f"{s.step_no / el:.1f} steps/s, dt={s.dt:.2e} s, front={snaps.front[-1] if snaps.front else float('nan'):.4f} m, "
-                f"KE={s.kinetic_energy():.3e} J/m, max|u|={s.max_speed():.3e} m/s")
-
-    if not resumed:
-        snap()
-    wall0 = _time.perf_counter() - s.stats.wall_s  # a restart goes on counting the wall time
-    try:
-        while not st.done and s.t < t_end - tol:
-            if s.step_no >= cfg.numerics.max_steps:
-                st.status = f"max_steps ({cfg.numerics.max_steps}) reached"
-                break
-            if s.nf == 0:
-                st.status = "every particle left through the outflow"
-                break
-            dt = s.time_step()
-            dt = step_towards(dt, min(st.next_out, t_end) - s.t)
-            s.dt = dt
-            s.step(dt)
-            s.stats.wall_s = _time.perf_counter() - wall0
-            at_output = s.t >= st.next_out - tol
-            if at_output:
-                snap()
-                st.next_out += out.dt_output
-                # rest: the max speed of all granular particles (every particle deposited), or the
-                # rms speed of those behind the front (a gap of one empty dx cell in a thin deposit
-                # moves the front back, so the max is taken over all particles)
-                vmax = s.mass_speed(math.inf if out.rest_measure == "max" else snaps.front[-1], out.rest_measure)
-                # the flow has started once the mass moves faster than the rest speed (a slow
-                # flat collapse never reaches 10x it: that rule put every such rest at 5 t_c)
-                if vmax > out.rest_speed or s.t > 5.0 * cfg.t_c:
-                    st.started = True
-                if st.started and vmax < out.rest_speed:
-                    if st.rest_since is None:
-                        st.rest_since = s.t
-                else:
-                    st.rest_since = None
-                if st.rest_since is not None and s.t - st.rest_since >= out.rest_duration - tol:
-                    st.time_to_rest = st.rest_since
-                    if out.stop_at_rest:
-                        st.status = "at rest"
-                        st.done = True
-            if checkpoint is not None:
-                checkpoint.after_step(st, at_output)
-            if at_output:
-                progress(message)  # raises the stage's interruption when SIGTERM/SIGINT asked for a stop
-    except IsphBlowUp as exc:
-        s.stats.wall_s = _time.perf_counter() - wall0
-        exc.snapshots = snaps
-        exc.solver = s
-        raise
-    s.stats.wall_s = _time.perf_counter() - wall0
-    status, time_to_rest, rest_since = st.status, st.time_to_rest, st.rest_since
-    if math.isnan(time_to_rest) and rest_since is not None and s.t - rest_since >= out.rest_duration - tol:
-        time_to_rest = rest_since
-    if status != "at rest" and not math.isnan(time_to_rest):
-        status = "at rest"
-    progress(message, final=True)
-    return s, snaps, status, time_to_rest
