@@ -57,7 +57,7 @@ include: "workflow/rules/isph.smk"  # 2D ISPH runs (Section 2.1-2.2, Table 1)
 include: "workflow/rules/monitor.smk"  # monitoring sections (Section 3, eqs 15-17, Appendix)
 include: "workflow/rules/regress.smk"  # critical DA momentum, A and B (Section 4.2, eq 36)
 include: "workflow/rules/da.smk"  # 1D DA SPH with/without deposition (Sections 2.3-2.4)
-include: "workflow/rules/path.smk"  # DA on the user's slope profiles (path_cases, issue 16)
+include: "workflow/rules/path.smk"  # DA on the user's slope profiles (path_cases)
 include: "workflow/rules/compare.smk"  # DA against the 2D reference (Section 4.3, Figs 15-16)
 include: "workflow/rules/verify.smk"  # analytic verification suites
 include: "workflow/rules/figures.smk"  # one rule per paper figure

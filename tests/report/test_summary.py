@@ -51,16 +51,17 @@ def test_summary_numbers_from_files(inputs):
     assert "| isph/T22-A70 | 123.4 | 457 |" in text
     assert "[fig5_free_surface.png](figures/fig5_free_surface.png)" in text
     # only the two studies beyond the paper (separate targets) were not given
-    assert text.count("Not available") == 5  # + claims scorecard, regression diagnosis, reading matrix not given
+    # + claims scorecard, regression diagnosis, DA per reading, reading matrix not given
+    assert text.count("Not available") == 6
     assert "convergence runs (`snakemake -j2 convergence`)" in text and "sensitivity table" in text
 
 
 def test_summary_missing_inputs_do_not_crash(tmp_path):
     text = build_summary(regression=tmp_path / "nope", compare=None, verification=[tmp_path / "v.csv"],
                          benchmarks=None, figures=None)
-    # table 3, table 5, compare, verification, convergence, sensitivity, benchmarks, figures, and the
-    # issue-13 sections: claims scorecard, regression diagnosis, reading matrix
-    assert text.count("_Not available") == 11
+    # table 3, table 5, compare, verification, convergence, sensitivity, benchmarks, figures, claims
+    # scorecard, regression diagnosis, DA per reading, reading matrix
+    assert text.count("_Not available") == 12
     assert "table3_comparison.csv not found" in text
 
 

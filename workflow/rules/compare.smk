@@ -157,6 +157,29 @@ rule compare:
         " --matrix {output.matrix} --maxima {output.maxima} > {log} 2>&1"
 
 
+rule da_readings:
+    """Every (hu)_C reading of the regression diagnosis through the DA with deposition, against the
+    2D reference: the runout error each reading leads to (summary, 'Every (hu)_C reading')."""
+    input:
+        diagnosis=DIAGNOSIS_OUTPUTS["table"],
+        reference=f"{RESULTS}/compare/reference_2d.csv",
+        warm=WARM,
+    output:
+        f"{RESULTS}/compare/da_readings.csv",
+    params:
+        n_particles=config["da"]["n_particles"],
+    log:
+        f"{LOGS}/compare/da_readings.log",
+    benchmark:
+        f"{BENCH}/compare/da_readings.tsv"
+    threads: config["da"]["threads"]
+    resources:
+        runtime=60,
+        mem_mb=2000,
+    shell:
+        "NUMBA_NUM_THREADS={threads} granudep da-readings {input.diagnosis} --reference {input.reference}"
+        " --n-particles {params.n_particles} -o {output} > {log} 2>&1"
+
 # Regression on the converged reference (claims scorecard, column "ours converged"): the runs of
 # compare.reference that `granudep reference` selects (per case the finest converged rung, the run at
 # compare.reference.dx, or the finest) and that are not this workflow's own run get monitoring sections and the eq-36

@@ -29,6 +29,7 @@ rule summary:
         maxima=COMPARE_OUTPUTS["maxima"],
         converged=f"{RESULTS}/compare/reference_converged.csv",
         diagnosis=DIAGNOSIS_OUTPUTS["table"],
+        da_readings=f"{RESULTS}/compare/da_readings.csv",
         extra_figures=list(EXTRA_FIGURES.values()),
         converged_regression=[f"{CONVERGED_REGRESSION}/table3_comparison.csv"] if CONVERGED_RUNS else [],
         verification=[f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"],
@@ -72,7 +73,7 @@ rule summary:
         " --convergence {params.convergence} --convergence-dx {params.convergence_dx}"
         " --convergence-n {params.convergence_n} --sensitivity {params.sensitivity}"
         " --caption-numbers {output.captions} --results {params.results}"
-        " --matrix {input.matrix} --maxima {input.maxima} --diagnosis {input.diagnosis} --claims {output.claims}"
+        " --matrix {input.matrix} --maxima {input.maxima} --diagnosis {input.diagnosis} --da-readings {input.da_readings} --claims {output.claims}"
         " {params.converged} --figures {params.figures} --captions {params.captions}"
         " > {log} 2>&1"
 

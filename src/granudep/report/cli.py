@@ -1,4 +1,5 @@
-"""CLI of the report stage: ``reference``, ``compare``, ``summary``, ``sensitivity-table``, ``readme-status``."""
+"""CLI of the report stage: ``reference``, ``compare``, ``da-readings``, ``summary``, ``sensitivity-table``,
+``readme-status``."""
 from __future__ import annotations
 
 import argparse
@@ -48,6 +49,34 @@ def _cmd_compare(args) -> int:
     return 0
 
 
+def _cmd_da_readings(args) -> int:
+    import pandas as pd
+    from .da_readings import pivot_markdown, reading_runs
+    from ..io import write_text
+    frames = {}
+    for key, path in (("diagnosis", args.diagnosis), ("--reference", args.reference)):
+        try:
+            frames[key] = pd.read_csv(path)
+        except (OSError, pd.errors.ParserError) as e:
+            raise SystemExit(f"granudep da-readings: {key}: cannot read {path} ({e})")
+    table = reading_runs(frames["diagnosis"], frames["--reference"], args.n_particles)
+    print(f"DA runout error against the 2D reference with deposition (N = {args.n_particles}), per reading "
+          "of (hu)_C; in brackets how much shorter than without deposition:\n")
+    print(pivot_markdown(table))
+    write_text(table.to_csv(index=False), args.output)
+    return 0
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}")
+    if not 20 <= v <= 1_000_000:
+        raise argparse.ArgumentTypeError(f"must be in [20, 1000000] (got {text})")
+    return v
+
+
 def _cmd_summary(args) -> int:
     from .summary import build_summary
     from ..io import write_text
@@ -62,6 +91,7 @@ def _cmd_summary(args) -> int:
                          convergence=args.convergence, sensitivity=args.sensitivity,
                          convergence_dx=args.convergence_dx, convergence_n=args.convergence_n,
                          matrix=args.matrix, maxima=args.maxima, claims=card, diagnosis=args.diagnosis,
+                         da_readings=args.da_readings,
                          captions=args.captions, results=args.results)
     write_text(text, args.output)
     LOG.info("summary written to %s", args.output)
@@ -125,6 +155,16 @@ def register(sub) -> None:
     p.add_argument("--maxima", metavar="MAXIMA.csv", help="write the reading matrix's maxima per reading")
     p.set_defaults(func=_cmd_compare)
 
+    p = sub.add_parser("da-readings", help="DA runout with deposition for every (hu)_C reading of the regression "
+                                           "diagnosis, against the 2D reference (CSV)")
+    p.add_argument("diagnosis", metavar="DIAGNOSIS.csv", help="granudep regress-diagnose table")
+    p.add_argument("--reference", required=True, metavar="REF.csv",
+                   help="granudep reference table of the Table 5 geometries (its 'path' names each 2D run)")
+    p.add_argument("--n-particles", type=_positive_int, default=1000, metavar="N",
+                   help="DA particles per run, in [20, 1000000] (the chain's da.n_particles)")
+    p.add_argument("-o", "--output", required=True, metavar="READINGS.csv")
+    p.set_defaults(func=_cmd_da_readings)
+
     p = sub.add_parser("summary", help="Markdown summary: paper-vs-ours tables, verification, figures")
     p.add_argument("-o", "--output", required=True, metavar="summary.md")
     p.add_argument("--html", metavar="summary.html",
@@ -146,6 +186,7 @@ def register(sub) -> None:
     p.add_argument("--converged-regression", metavar="DIR",
                    help="regression folder of the converged 2D runs (scorecard column 'ours converged')")
     p.add_argument("--diagnosis", metavar="CSV", help="regression diagnosis table (granudep regress-diagnose)")
+    p.add_argument("--da-readings", metavar="CSV", help="DA runout per (hu)_C reading (granudep da-readings)")
     p.add_argument("--verification", nargs="*", metavar="CSV", help="granudep verify outputs")
     p.add_argument("--benchmarks", metavar="CSV|DIR", help="benchmark CSV, or a folder of Snakemake benchmark .tsv files")
     p.add_argument("--figures", nargs="+", metavar="NAME=PATH",
