@@ -1,4 +1,4 @@
-"""Issue 25: the bed-law table. Each 2D case run with each bed law (``wall.slip``) at each
+"""The bed-law table. Each 2D case run with each bed law (``wall.slip``) at each
 resolution; per run the attached and volume fronts, the time to rest by both rules, Table 3's
 critical times against the paper and the energy dissipated at the wall and in the bulk.
 

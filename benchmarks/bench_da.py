@@ -1,7 +1,7 @@
 """Benchmark of the DA SPH solver: 1D-A70, 1000 particles, run to rest (no deposition, and one
 deposition run with a fixed x_inf). Prints wall time after JIT and particle-steps per second.
 
-Target (issue 2): <= 1 s after compilation on one core. Run with NUMBA_NUM_THREADS=1; the
+Target: <= 1 s after compilation on one core. Run with NUMBA_NUM_THREADS=1; the
 machine is shared, so report the load next to the numbers:
 
     NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/bench_da.py [--repeat 3]

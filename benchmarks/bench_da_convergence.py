@@ -1,4 +1,4 @@
-"""Convergence of the DA runout in the particle number N (issue 27): which N gives a runout that
+"""Convergence of the DA runout in the particle number N: which N gives a runout that
 changes < 1 % per doubling, and how long that run takes on one core.
 
 Two problems, each without and with deposition, N doubled from ``--n-min`` to ``--n-max``:

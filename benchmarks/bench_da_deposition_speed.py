@@ -1,8 +1,9 @@
-"""Does deposition speed a DA flow up? (issue 27): runout, maximum speed and flow time of 1D-A70 and
-the example path (config/da/example_path.yaml) without deposition and with it under the variants
-of issue 27: before it (a particle's own deposit in its bed term, deposition on any slope), each
+"""Does deposition speed a DA flow up? Runout, maximum speed and flow time of 1D-A70 and
+the example path (config/da/example_path.yaml) without deposition and with it under these
+variants: the former behaviour (a particle's own deposit in its bed term, deposition on any slope), each
 of the two changes alone (``deposition.own_deposit: exclude``, ``deposition.steep_bed:
-no_deposit``), both (the default since), and no deposit-as-bed term at all (eq 11 as printed). Deposition runs use each config's own x∞ mode (self-consistent by default):
+no_deposit``), both (the default), and no deposit-as-bed term at all (eq 11 as printed).
+Deposition runs use each config's own x∞ mode (self-consistent by default):
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_da_deposition_speed.py [--cases 1D-A70 example_path]
         [--n-particles N] [--csv OUT.csv]

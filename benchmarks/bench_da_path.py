@@ -1,8 +1,8 @@
-"""Benchmark of the DA model on a path profile (issue 16): 10 000 particles on a 1 km path
+"""Benchmark of the DA model on a path profile: 10 000 particles on a 1 km path
 (a 30° slope over 600 m easing into a 400 m flat runout zone, σ = 20 m), a 50 m × 5 m release,
 run to rest. Prints the wall time after JIT, the steps and particle-steps per second.
 
-Target (issue 16): <= 10 s after compilation on one core. Run with NUMBA_NUM_THREADS=1; the
+Target: <= 10 s after compilation on one core. Run with NUMBA_NUM_THREADS=1; the
 machine is shared, so the load average and the process CPU time are printed next to the numbers:
 
     NUMBA_NUM_THREADS=1 python benchmarks/bench_da_path.py [--n-particles 10000] [--deposition]

@@ -6,7 +6,7 @@ time of T22-A70 at dx = 4 mm to rest (``--full``, solver ``--full-solver``).
 
 Run: NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/bench_isph.py [--steps 100] [--solvers cg,cg_dic,direct]
      [--full [--full-solver cg_dic]]
-Targets (issue 3, one core): <= 8 ms/step at ~4000 particles; T22-A70 to rest <= 60 s.
+Targets (one core): <= 8 ms/step at ~4000 particles; T22-A70 to rest <= 60 s.
 
 Measured 2026-11-22 on the shared 2-core AMD EPYC under load (load average 1.5-4; minimum of
 interleaved repeats, so the numbers are upper bounds), ms/step [neighbours, kernels, viscous, PPE]:
@@ -21,7 +21,7 @@ per-iteration Python overhead weighs more): before 23.9 s (repeats 27.5, 31.1; 2
 (repeats 14.3, 14.9; same 2499 steps, same front and rest time), cg_dic 12.0 s (2448 steps; a
 different trajectory, see docs/model.md "Linear solvers").
 
-Performance pass (session 3), measured the same way (interleaved with the previous code, minimum of
+A later performance pass, measured the same way (interleaved with the previous code, minimum of
 3, --steps 400, load average 0.8-0.9): cg_dic 11.80 [1.07, 1.70, 3.52, 5.38] -> 6.78 ms/step
 [1.00, 0.97, 2.28, 2.41]; CG iterations/step PPE 62 -> 31, viscous (u+v) 46 -> 26. From: modified
 incomplete Cholesky (ic_modification 0.97: PPE 62 -> 30 iterations), triangles with unsigned,

@@ -1,12 +1,12 @@
-"""Scaling benchmark of the 2D ISPH solver (not a test; issue 12): ms/step, particle-steps/s and the
+"""Scaling benchmark of the 2D ISPH solver (not a test): ms/step, particle-steps/s and the
 breakdown (neighbours, kernels, viscous, PPE) with the CG/AMG iterations at 3750, 15 000 and 60 000
-particles (T22-A150 at dx = 4, 2, 1 mm: the particle counts of the issue), from a developed flow
+particles (T22-A150 at dx = 4, 2, 1 mm), from a developed flow
 (a checkpoint after ``--t-flow`` s of collapse at 4 mm, refined to 2 and 1 mm and relaxed for 50
 steps, see :func:`refine`; built once and cached under results/bench_cache/);
 the fitted exponent of cost/step vs N; the peak RSS; optionally T22-A70 to rest (``--to-rest``).
 
-Each variant also prints the parts of its step (issue 26: PPE assembly, PPE CG, viscous assembly,
-viscous CG, the rest) and the issue-26 targets (printed, never asserted): <= 10 ms/step at 3750
+Each variant also prints the parts of its step (PPE assembly, PPE CG, viscous assembly,
+viscous CG, the rest) and the speed targets (printed, never asserted): <= 10 ms/step at 3750
 particles on one thread, and T22-A70 at 1 mm to rest <= 20 min estimated from ms/step at 28 000
 particles (power law between the measured N) x 6109 steps (the no-slip bed's run to rest). A variant is a
 numerics.pressure_solver value, optionally /numerics.ppe_operator (cg_dic/matrix_free), or
@@ -19,14 +19,14 @@ Run (one command per figure set):
       [--set numerics.projection=approximate]   (scheme options of the timed steps; default: adjoint pair)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py ...
   python benchmarks/bench_isph_scaling.py --threads 1,2      (one subprocess per thread count, interleaved;
-      two threads: numerics.threads_mode auto = the PPE geometry beside the predictor, session 17;
+      two threads: numerics.threads_mode auto = the PPE geometry beside the predictor;
       --set numerics.threads_mode=prange for the kernels' parallel builds instead)
   NUMBA_NUM_THREADS=2 python benchmarks/bench_isph_scaling.py --to-rest 2,1   (T22-A70 to rest, wall time)
       [--set numerics.deflation_min_unknowns=1000000000000]   (scheme options also apply to --to-rest)
 Timings on a shared machine are noisy: ``--repeats`` runs the same steps again from the
 checkpoint (interleaved over the solvers) and the median is printed, with the process CPU time.
 
-Measured 2026-12-01 (session 5) on the shared 2-core machine at load average 4.5-6.5 (four agents;
+Measured 2026-12-01 on the shared 2-core machine at load average 4.5-6.5 (four agents;
 ``--threads 1,2,1,2 --repeats 1 --steps 20``, the two runs of each thread count shown), ms/step
 [neighbours, kernels, viscous, PPE], cg_dic, 30.9-36 PPE and 18-29 viscous iterations per step:
   1 thread:  N = 3750: 47.8 / 24.1 [6.6, 11.1, 12.3, 17.5]; 15000: 161 / 135; 60000: 483 / 596
@@ -42,8 +42,9 @@ Again at load average 2.7-4.7 (``--threads 1,2,1,2,1,2``), medians of the three 
 The 2-thread runs used as much CPU time as wall time (e.g. 365 CPU ms in a 367 ms step): the second
 core was taken by other jobs. Control: a trivially parallel numba prange loop gave 0.53-0.76 s on
 one and 0.60-0.65 s on two threads at the same load. So the spread between repeats (2x at 4 mm)
-is the machine's load, not the code, and no 2-thread speed-up could be resolved under it. The same code idle was not measurable in session 5 (the 6.1 ms/step of
-``bench_isph.py`` in the README was measured on an idle core in session 4). Before the fixed-order
+is the machine's load, not the code, and no 2-thread speed-up could be resolved under it. The same code
+could not be measured idle that day (the 6.1 ms/step of ``bench_isph.py`` in the README was measured
+earlier on an idle core). Before the fixed-order
 dot products of linsolve (OpenBLAS threading each ddot above 10 000 entries), the 2 mm step read
 1434/1330 ms (now 128/132 ms in the same A/B, 10 steps). T22-A70 to rest at 2 mm (7000 particles,
 one thread, load average 6-13): 807 s, 4191 steps, 192.5 ms/step, at rest 17.97 t_c, front 2.136 m,
@@ -155,15 +156,16 @@ def _restart(s, solver: str):
     return s
 
 
-#: seconds spent in the parts of the step (issue 26), filled by the wrappers of :func:`_install_part_timers`
+#: seconds spent in the parts of the step, filled by the wrappers of :func:`_install_part_timers`
 PARTS: dict = {}
 
 
 def _install_part_timers() -> None:
     """Time the PPE assembly (CSR product or matrix-free operator), the PPE solve, the viscous
     assembly and the viscous solve inside every step (wrappers around the module functions)."""
-    from granudep.isph import projection, solver as solmod, viscous
-    if getattr(solmod, "_bench_parts", False):
+    from granudep.isph import projection, viscous
+    from granudep.isph.linear_systems import LinearSystems
+    if getattr(LinearSystems, "_bench_parts", False):
         return
 
     def wrap(owner, name, key):
@@ -180,11 +182,11 @@ def _install_part_timers() -> None:
     wrap(projection, "matrix_free_operator", "ppe_assembly")
     wrap(projection, "adjoint_triangles", "ppe_assembly")
     wrap(projection, "ppe_rhs", "ppe_assembly")
-    wrap(solmod.IsphSolver, "_solve_ppe", "ppe_solve")
-    wrap(solmod.IsphSolver, "_solve_ppe_free", "ppe_solve")
+    wrap(LinearSystems, "solve_ppe", "ppe_solve")
+    wrap(LinearSystems, "solve_ppe_free", "ppe_solve")
     wrap(viscous, "assemble_viscous", "visc_assembly")
-    wrap(solmod.IsphSolver, "_solve_cg_pair", "visc_solve")
-    solmod._bench_parts = True
+    wrap(LinearSystems, "solve_cg_pair", "visc_solve")
+    LinearSystems._bench_parts = True
 
 
 def time_steps(case: str, dx: float, t_flow: float, solver: str, steps: int) -> dict:
@@ -259,15 +261,15 @@ def per_step(args) -> None:
     print(f"peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MB")
 
 
-#: T22-A70 at dx = 1 mm: particles and steps to rest with the default (no-slip) bed, measured in
-#: session 15 (`--to-rest 1`: at rest at 12.57 t_c after 6109 steps, 1757 s on one thread; session 17,
-#: the deflated PPE: 6126 steps, 1224.7 s). Session 10's Coulomb-bed run needed 13 877 steps (README
+#: T22-A70 at dx = 1 mm: particles and steps to rest with the default (no-slip) bed, measured with
+#: `--to-rest 1` (SSOR-CG PPE without deflation: at rest at 12.57 t_c after 6109 steps, 1757 s on one
+#: thread; the deflated PPE: 6126 steps, 1224.7 s). The 2026-12-02 Coulomb-bed run needed 13 877 steps (README
 #: "A 1 mm rung").
 N_1MM, STEPS_1MM = 28_000, 6_109
 
 
 def print_targets(solver: str, ns, ts, cpus=None) -> None:
-    """Issue 26's targets (printed, never asserted): <= 10 ms/step at 3750 particles on one thread;
+    """The speed targets (printed, never asserted): <= 10 ms/step at 3750 particles on one thread;
     T22-A70 at 1 mm to rest <= 20 min, estimated as ms/step at 28 000 particles (the power law
     through the two nearest measured N) times 6109 steps (``STEPS_1MM``). Each from the wall time and, on a
     loaded machine the better guess of an idle core, from the process CPU time (``cpus``)."""
@@ -285,8 +287,8 @@ def print_targets(solver: str, ns, ts, cpus=None) -> None:
             k = math.log(t1 / t0) / math.log(n1 / n0)
             est = t0 * (N_1MM / n0) ** k
             minutes = est * STEPS_1MM / 6e4
-            # a proxy (T22-A150's developed flow, not T22-A70's phases): session 17 estimated 19.8 min and
-            # measured 20.4 (--to-rest 1), session 15 estimated 20.7 and measured 29.3; only a run decides
+            # a proxy (T22-A150's developed flow, not T22-A70's phases): with the deflated PPE it estimated
+            # 19.8 min and a run measured 20.4 (--to-rest 1), without deflation 20.7 and 29.3; only a run decides
             print(f"  target {solver} ({label}): T22-A70 at 1 mm to rest <= 20 min: estimated {est:.0f} ms/step at "
                   f"{N_1MM} particles x {STEPS_1MM} steps = {minutes:.1f} min "
                   f"({'below' if minutes <= 20.0 else 'above'} 20 min; an estimate: measure with --to-rest 1)")

@@ -1,4 +1,4 @@
-"""Issue 12: is the fine ISPH step bound by memory bandwidth? (not a test; prints figures)
+"""Is the fine ISPH step bound by memory bandwidth? (not a test; prints figures)
 
     NUMBA_NUM_THREADS=2 python benchmarks/bench_memory_bound.py [--dx 2,1] [--repeats 20]
 
@@ -15,7 +15,7 @@ to the measured solve. A product that draws close to the triad bandwidth on one 
 made much faster by a second thread on the same memory bus. Run it on an idle machine: another
 process on the other core takes part of the bus.
 
-Measured 2026-12-02 (session 11, idle 2-core AMD EPYC VM, ``--dx 2,1 --repeats 20``): triad 23.1 GB/s
+Measured 2026-12-02 (idle 2-core AMD EPYC VM, ``--dx 2,1 --repeats 20``): triad 23.1 GB/s
 on one thread, 30.5 on two (medians 19.5 / 21.1). 1 mm system (59 706 unknowns, 4.08 M entries, 68
 per row, 67 MB): A p 4.97 ms on one thread (13.4 GB/s, 58 % of the triad), 2.97 ms best / 4.39 ms
 median on two; the two-level CG 400 ms (1 thread) / 341 ms (2 threads), 51 iterations, 7.3 ms per

@@ -1,5 +1,5 @@
 """Decelerating μ(I) layers below the static friction: how each code treats the bed of a sheet a few
-particles (cells) thick, against a converged 1D reference (session 13, issue 25).
+particles (cells) thick, against a converged 1D reference.
 
     NUMBA_NUM_THREADS=1 python benchmarks/decelerating_layer.py [--heights 4 6 10 20] [--dx 2 1 0.5]
         [--bed-stress bed centre wall] [-o docs/data/decelerating_layer.csv]

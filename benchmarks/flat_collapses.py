@@ -1,4 +1,4 @@
-"""Issue 11: the θ = 0 column collapses (glass beads and quartz sand, L0 = 0.1 m, a = 0.5 and 1) on
+"""The θ = 0 column collapses (glass beads and quartz sand, L0 = 0.1 m, a = 0.5 and 1) on
 a resolution ladder, with the robust front measures, their change between the two finest
 resolutions and, from the three finest, the observed order and the Richardson value.
 
@@ -10,7 +10,7 @@ Each case is :func:`granudep.isph.verification.flat_collapse_config` (Coulomb be
 material's own friction angle, default scheme, run to rest). Measures (``ΔL/L0 = (x − L0)/L0``):
 the 1 % volume front (``v99``), the attached front at a 2 d and at a 5 mm thickness, the highest
 particle at rest H/L0, the time to rest t_s/t_c and the largest energy excess over E_0 (share of
-E_ref). Cost on one core (session 11): glass a = 0.5 at 2 / 1 / 0.7 / 0.5 mm 28 s / 34 s / 1.9 min /
+E_ref). Cost on one core: glass a = 0.5 at 2 / 1 / 0.7 / 0.5 mm 28 s / 34 s / 1.9 min /
 ~8 min; the a = 1 columns twice the particles.
 """
 from __future__ import annotations

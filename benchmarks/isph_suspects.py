@@ -1,4 +1,4 @@
-"""Issue 11: the dx-dependent suspects of the T22-A70 runout drift, one option changed at a time.
+"""The dx-dependent suspects of the T22-A70 runout drift, one option changed at a time.
 
     NUMBA_NUM_THREADS=1 python benchmarks/isph_suspects.py [--dx 0.004 0.003] [--only NAME ...] [-o CSV]
 
@@ -6,7 +6,7 @@ Runs T22-A70 at each dx for the default scheme and for every variant below, and 
 variant, the robust front measures at rest (attached front at 2 d and at 5 mm, the 1 % volume
 front; ΔL/L0 = (x − L0)/L0), their change between the two resolutions, the time to rest and the
 largest energy excess. A variant whose change is much smaller than the default's is a cause of the
-drift; none is adopted from this table alone (issue 11: no parameter is tuned to a runout).
+drift; none is adopted from this table alone (no parameter is tuned to a runout).
 Each run takes 1–3 min at 4 mm and 2–5 min at 3 mm on one core.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""PySPH's 2D dam break beside granudep's, on this machine, in one run (issue 26; not a test).
+"""PySPH's 2D dam break beside granudep's, on this machine, in one run (not a test).
 
 PySPH is never a granudep dependency: it lives in a scratch virtual environment outside the
 repository (default /work/scratch/pysph-venv, created and filled here when missing: ``pip install
@@ -20,7 +20,7 @@ it diverges within 0.02 s ("Domain size has increased by a large amount"): no ms
 
 Run: NUMBA_NUM_THREADS=1 python benchmarks/pysph_side_by_side.py [--schemes sisph,wcsph]
      [--solvers cg_two_level,cg_dic] [--repeats 3] [--venv /work/scratch/pysph-venv]
-Target (issue 26, printed, not asserted): granudep >= 2.5x faster than PySPH's SISPH.
+Target (printed, not asserted): granudep >= 2.5x faster than PySPH's SISPH.
 """
 from __future__ import annotations
 

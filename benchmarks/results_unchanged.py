@@ -1,5 +1,5 @@
-"""Are the outputs of this checkout bit for bit those of another revision? (issue 15: structure and
-numerics in separate commits, the ISPH and DA outputs unchanged by each structural step)
+"""Are the outputs of this checkout bit for bit those of another revision? (structure and
+numerics go in separate commits, the ISPH and DA outputs unchanged by each structural step)
 
     python benchmarks/results_unchanged.py [--base main] [--dx 0.008] [--keep DIR] [--threads 1]
 

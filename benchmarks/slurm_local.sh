@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Bring up a single-node Slurm on this machine from Debian's packages, for running the workflow's
-# SLURM profile for real (issue 14 item 12; tests/workflow/test_slurm_real.py runs it).
+# SLURM profile for real (tests/workflow/test_slurm_real.py runs it).
 #
 #   sudo benchmarks/slurm_local.sh up      # install (apt) if needed, configure, start the daemons
 #   benchmarks/slurm_local.sh status       # sinfo + a test job

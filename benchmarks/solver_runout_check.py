@@ -1,4 +1,4 @@
-"""How far does a change of linear solver move the runout? (issue 26: results identical within the
+"""How far does a change of linear solver move the runout? (Target: results identical within the
 CG tolerance, runouts moved by <= 0.5 %)
 
     NUMBA_NUM_THREADS=1 python benchmarks/solver_runout_check.py --dx 0.004 --seeds 0,1,2,3 \\
@@ -7,7 +7,7 @@ CG tolerance, runouts moved by <= 0.5 %)
 
 Runs T22-A70 (``--case``) to rest at ``--dx`` for each variant (a name and config overrides) and each
 seed (0: the unperturbed lattice; k > 0: the granular particles' initial positions moved by
-0.01 dx, normal, seed k, as the time-step study of session 9 did: round-off alone moves a single
+0.01 dx, normal, seed k, as the time-step study (docs/model.md) did: round-off alone moves a single
 run by 0.3-0.7 %, so a solver change is judged on the mean over seeds against the seed spread).
 Prints one row per run (volume front v99, 2 d front, rest times, steps, largest energy excess,
 solver fallbacks, PPE iterations per step, CPU seconds) and, per variant, the mean and its change

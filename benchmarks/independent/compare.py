@@ -1,4 +1,4 @@
-"""Basilisk (granular.h) against granudep at 2 mm, no-slip bed (issue 25, item 1).
+"""Basilisk (granular.h) against granudep at 2 mm, no-slip bed.
 
     python benchmarks/independent/compare.py [--granudep-dir /work/scratch/indep_granudep]
 
@@ -26,7 +26,7 @@ GRANUDEP_FILES = {"T22-A70": "T22-A70_noslip_dx0.002.nc", "flat-glass-a0.5": "fl
 FRONTS = ("front_2mm", "front_5mm", "front_v99")
 #: granudep diagnostic runs (T22-A70, no-slip, 4 mm): the bed stress of the first particle layer taken
 #: at the bed's normal stress (wall.bed_stress: bed, the default) or at the particle centre (centre,
-#: sessions 1-11; what a cell-centred viscosity at a no-slip bed does in Basilisk)
+#: the earlier form; what a cell-centred viscosity at a no-slip bed does in Basilisk)
 BEDSTRESS_FILES = {"bed": "T22-A70_noslip_bed_dx0.004.nc", "centre": "T22-A70_noslip_centre_dx0.004.nc",
                    "centre, 2 mm, to t = 1.25 s": "T22-A70_noslip_centre_dx0.002_t1.25.nc"}
 

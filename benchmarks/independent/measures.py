@@ -1,4 +1,4 @@
-"""Measures of the Basilisk runs (issue 25, item 1) with granudep's own definitions.
+"""Measures of the Basilisk runs with granudep's own definitions.
 
     python benchmarks/independent/measures.py [--runs /work/scratch/basilisk/runs]
 

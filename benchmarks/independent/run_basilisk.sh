@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Independent continuum mu(I) solution (issue 25, item 1): Basilisk + P.-Y. Lagree's sandbox
+# Independent continuum mu(I) solution: Basilisk + P.-Y. Lagree's sandbox
 # granular.h, driven by our column.c, for T22-A70 and the flat glass-bead collapses with a no-slip
 # bed. One command: builds Basilisk's qcc in a scratch folder outside the repository, compiles
 # column.c, runs every case, writes the measures (benchmarks/independent/measures.py).
@@ -59,7 +59,7 @@ sed -e 's/    if (p\[\] > 0.) {/    double pe = f[] > 0.01 ? max(p[], pfloor_coe
     -e 's|eta\[\] = max((Co + muI\*p\[\])/D2, etamin);|eta[] = max((Co + muI*pe)/D2, etamin);|' \
     "$GH/granular.h" > "$SCRATCH/granular_pfloor.h"
 test "$(grep -c 'sqrt(pe)\|muI\*pe\|if (pe > 0.)' "$SCRATCH/granular_pfloor.h")" -ge 3 || { echo "granular_pfloor.h: sed did not apply" >&2; exit 1; }
-# diagnostic variant (session 13): the bed face's mu(I) viscosity at the bed's normal stress
+# diagnostic variant: the bed face's mu(I) viscosity at the bed's normal stress
 # (granudep's wall.bed_stress: bed): bed_stress_block.h inserted before granular.h's final boundary()
 "${PYTHON:-python}" - "$GH/granular.h" "$HERE/bed_stress_block.h" "$SCRATCH/granular_bed.h" <<'PYEOF'
 import sys
@@ -114,13 +114,13 @@ ALL=(
   "T22bed_5    22 0.2 0.14 0.16 12 1 5 3.722"
   "T22bed_3.33 22 0.2 0.14 0.053333333333 36 3 4 3.722"
 )
-# decelerating layers (session 13; benchmarks/decelerating_layer.py): name h(m) dx(m), 22 deg,
+# decelerating layers (benchmarks/decelerating_layer.py): name h(m) dx(m), 22 deg,
 # Bagnold-shaped start at 1 m/s, 1.2 s; "layerbed_*" with the bed face at the bed's normal stress
 LAYERS=(
   "layer_h4_dx2 0.004 0.002"   "layer_h6_dx2 0.006 0.002"   "layer_h10_dx2 0.01 0.002"  "layer_h20_dx2 0.02 0.002"
   "layer_h4_dx1 0.004 0.001"   "layer_h6_dx1 0.006 0.001"   "layer_h10_dx1 0.01 0.001"  "layer_h20_dx1 0.02 0.001"
 )
-# (0.5 mm was tried in session 14: layer_h4_dx0.5 lost its viscous multigrid convergence at
+# (0.5 mm was tried: layer_h4_dx0.5 lost its viscous multigrid convergence at
 # t = 0.27 s, u.x residual 1e7 after 100 relaxations, and aborted in events.h; not run)
 SEL="${CASES:-}"
 for spec in "${ALL[@]}"; do

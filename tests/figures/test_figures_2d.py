@@ -145,7 +145,7 @@ ALL = {
 
 
 def test_every_cli_name_is_tested():
-    # fig15-17 and the issue-13 figures (reading-matrix, fig12r) are tested in their own files
+    # fig15-17 and the reading-matrix and fig12r figures are tested in their own files
     assert set(ALL) | {"fig15", "fig16", "fig17", "reading-matrix", "fig12r"} == set(FIGURES)
 
 
