@@ -8,6 +8,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from granudep.config import ConfigError
+from granudep.isph import ppe_operator as po
 from granudep.isph import projection as pj
 from granudep.isph.config import load_config
 from granudep.isph.linsolve import (free_coarse_matrix, free_aggregates, free_diagonal, free_matvec, pcg_dic,
@@ -47,7 +48,7 @@ def _system(stab=0.3, seed=5):
 @pytest.mark.parametrize("stab", [0.0, 0.01, 0.3])
 def test_matrix_free_operator_is_the_dense_product_and_its_rhs_the_assembled_one(stab):
     args, dense, rhs_ref = _system(stab)
-    op, rhs = pj.matrix_free_ppe(*args)
+    op, rhs = po.matrix_free_ppe(*args)
     nf = args[5]
     m = rhs.size
     scale = np.abs(dense).max()
@@ -67,15 +68,15 @@ def test_matrix_free_operator_is_the_dense_product_and_its_rhs_the_assembled_one
         pm[np.arange(m), agg] = 1.0
         assert np.allclose(free_coarse_matrix(op, agg, nc), pm.T @ dense @ pm, atol=1e-12 * scale * m)
     # and the assembled CSR holds the same matrix
-    indptr, indices, data, rhs_a = pj.assemble_adjoint_ppe(*args)
+    indptr, indices, data, rhs_a = po.assemble_adjoint_ppe(*args)
     assert np.allclose(sp.csr_matrix((data, indices, indptr)).toarray(), dense, atol=1e-12 * scale)
 
 
 @pytest.mark.parametrize("stab", [0.0, 0.01, 0.3])
 def test_triangles_are_the_split_of_the_assembled_matrix(stab):
     args, dense, rhs_ref = _system(stab)
-    tri, rhs = pj.assemble_adjoint_triangles(*args)
-    indptr, indices, data, rhs_a = pj.assemble_adjoint_ppe(*args)
+    tri, rhs = po.assemble_adjoint_triangles(*args)
+    indptr, indices, data, rhs_a = po.assemble_adjoint_ppe(*args)
     ref = split_triangles(indptr, indices, data)
     scale = np.abs(dense).max()
     for name, got, want in zip(("lp", "li", "lv", "up", "ui", "uv", "diag"), tri, ref):
@@ -94,20 +95,20 @@ def test_the_rhs_is_the_dense_one_and_the_csr_assembly_s(stab):
     the CSR product's own right-hand side (a separate code path)."""
     args, dense, rhs_ref = _system(stab)
     assert np.abs(args[-2]).max() > 0                 # the known pressures are not all zero
-    rhs = pj.ppe_rhs(*args)
+    rhs = po.ppe_rhs(*args)
     assert np.allclose(rhs, rhs_ref, atol=1e-10 * np.abs(rhs_ref).max())
-    assert np.allclose(rhs, pj.assemble_adjoint_ppe(*args)[3], atol=1e-12 * np.abs(rhs_ref).max())
+    assert np.allclose(rhs, po.assemble_adjoint_ppe(*args)[3], atol=1e-12 * np.abs(rhs_ref).max())
 
 
 def test_fast_ppe_solvers_agree_with_superlu_within_the_cg_tolerance():
     args, dense, rhs_ref = _system(0.01)
-    indptr, indices, data, rhs = pj.assemble_adjoint_ppe(*args)
+    indptr, indices, data, rhs = po.assemble_adjoint_ppe(*args)
     a = sp.csr_matrix((data, indices, indptr)).tocsc()
     exact = spla.spsolve(a, rhs)
     rtol = 1e-10
     x0 = np.zeros(rhs.size)
-    op, rhs_f = pj.matrix_free_ppe(*args)
-    tri, rhs_t = pj.assemble_adjoint_triangles(*args)
+    op, rhs_f = po.matrix_free_ppe(*args)
+    tri, rhs_t = po.assemble_adjoint_triangles(*args)
     sols = {"two_level": pcg_two_level(indptr, indices, data, rhs, x0, rtol, 0.0, 1000),
             "free": pcg_two_level_free(op, rhs_f, x0, rtol, 0.0, 1000),
             "free_two_stage": pcg_two_level_free(op, rhs_f, x0, rtol, 0.0, 1000, 3),
@@ -128,14 +129,14 @@ def test_fast_ppe_solvers_agree_with_superlu_within_the_cg_tolerance():
 
 def test_fast_ppe_solvers_report_breakdown_and_zero_rhs():
     args, dense, rhs_ref = _system(0.01)
-    op, rhs = pj.matrix_free_ppe(*args)
+    op, rhs = po.matrix_free_ppe(*args)
     x0 = np.zeros(rhs.size)
     x, it, info = pcg_two_level_free(op, np.zeros_like(rhs), x0, 1e-8, 0.0, 100)
     assert info == 0 and it == 0 and not x.any()
     bad = rhs.copy()
     bad[0] = np.nan
     assert pcg_two_level_free(op, bad, x0, 1e-8, 0.0, 100)[2] < 0
-    tri, rhs_t = pj.assemble_adjoint_triangles(*args)
+    tri, rhs_t = po.assemble_adjoint_triangles(*args)
     assert pcg_dic_split(*tri, bad, x0, 1e-8, 0.0, 100, -1.0)[2] < 0
     neg = list(tri)
     neg[6] = -neg[6]                                  # a negative diagonal: the SSOR pivots refuse it

@@ -79,6 +79,7 @@ def test_adjoint_divergence_sees_a_uniform_translation_on_a_disordered_cloud():
 # ------------------------------------------------------------------------------------------------
 # adjoint-pair projection with pressure-carrying walls, against plain NumPy
 # ------------------------------------------------------------------------------------------------
+from granudep.isph import ppe_operator as po  # noqa: E402
 from granudep.isph import projection as pj  # noqa: E402
 
 
@@ -142,9 +143,9 @@ def test_adjoint_pair_divergence_matches_the_pairwise_formula_and_its_gradient_i
     dxm, dym = _naive_d(c)
     rng = np.random.default_rng(4)
     u, v, p = rng.normal(size=nf), rng.normal(size=nf), rng.normal(size=n)
-    d = pj.apply_divergence(n, rows, cols, cx, cy, u, v)
+    d = po.apply_divergence(n, rows, cols, cx, cy, u, v)
     assert np.allclose(d, dxm @ u + dym @ v, rtol=1e-12, atol=1e-12 * np.abs(d).max())
-    gx, gy = pj.apply_gradient(nf, rows, cols, cx, cy, p)
+    gx, gy = po.apply_gradient(nf, rows, cols, cx, cy, p)
     assert np.allclose(gx, -dxm.T @ p, atol=1e-12 * np.abs(gx).max())
     assert np.allclose(gy, -dym.T @ p, atol=1e-12 * np.abs(gy).max())
     # discrete integration by parts: Σ u·G p = −Σ p D u
@@ -159,10 +160,10 @@ def test_adjoint_pair_divergence_is_exact_for_linear_fields_away_from_walls_and_
     inner = (np.abs(x - x.mean()) < 2.5 * c["dx"]) & (np.abs(y - y.mean()) < 2.5 * c["dx"])
     u = 0.3 + 2.0 * x - 1.0 * y
     v = -0.1 + 0.5 * x + 3.0 * y                          # div = 5
-    d = pj.apply_divergence(n, rows, cols, cx, cy, u, v)
+    d = po.apply_divergence(n, rows, cols, cx, cy, u, v)
     assert np.allclose(d[:nf][inner], 5.0, rtol=1e-9)
     # a uniform slide along the bed: no divergence anywhere, walls included (walls see u·n only)
-    d = pj.apply_divergence(n, rows, cols, cx, cy, np.ones(nf), np.zeros(nf))
+    d = po.apply_divergence(n, rows, cols, cx, cy, np.ones(nf), np.zeros(nf))
     assert np.max(np.abs(d)) < 1e-9 * np.max(np.abs(cx))
 
 
@@ -206,7 +207,7 @@ def test_adjoint_pair_matrix_equals_the_dense_product_plus_the_compact_laplacian
     unknown[unk] = np.arange(unk.size)
     p = np.where(known, np.random.default_rng(5).normal(size=n), 0.0)
     b = np.random.default_rng(6).normal(size=n)
-    indptr, indices, data, rhs = pj.assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown,
+    indptr, indices, data, rhs = po.assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown,
                                                          unk.size, p, b)
     dense = np.zeros((unk.size, unk.size))
     for r in range(unk.size):
@@ -218,7 +219,7 @@ def test_adjoint_pair_matrix_equals_the_dense_product_plus_the_compact_laplacian
                        atol=1e-10 * np.abs(rhs).max())
     # the node blocks of the threads (one per numba thread) do not change a bit of it
     for nblock in (2, 3, 7):
-        got = pj._assemble_blocks.serial(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b,
+        got = po._assemble_blocks.serial(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b,
                                          nblock)
         for a, e in zip(got, (indptr, indices, data, rhs)):
             assert a.dtype == e.dtype and np.array_equal(a, e), nblock
@@ -241,8 +242,8 @@ def test_adjoint_pair_projection_never_raises_the_kinetic_energy_and_removes_the
         assert ke1 < ke0
         if stab == 0.0:
             # the exact projection: D u = 0 on every node solved for, and ΔE = −½ (Δt/ρ)² |G p|²
-            d = pj.apply_divergence(n, rows, cols, cx, cy, u, v)
-            d0 = pj.apply_divergence(n, rows, cols, cx, cy, us, vs)
+            d = po.apply_divergence(n, rows, cols, cx, cy, u, v)
+            d0 = po.apply_divergence(n, rows, cols, cx, cy, us, vs)
             solved = np.concatenate((~fs, p[nf:] != 0))
             assert np.max(np.abs(d[solved])) < 1e-6 * np.max(np.abs(d0[solved]))
             assert np.isclose(ke1 - ke0, -0.5 * (dt / rho) ** 2 * np.sum(gx ** 2 + gy ** 2), rtol=1e-6)
@@ -257,11 +258,11 @@ def test_adjoint_pair_stabilisation_leaves_a_divergence_that_vanishes_with_epsil
     x, y = c["x"][:nf], c["y"][:nf]
     fs = y > 0.125
     us, vs = np.sin(40.0 * y) + 3.0 * x, -1.0 - 2.0 * y + np.cos(30.0 * x)
-    d0 = pj.apply_divergence(n, rows, cols, cx, cy, us, vs)
+    d0 = po.apply_divergence(n, rows, cols, cx, cy, us, vs)
     left = []
     for stab in (0.01, 0.1, 0.5):
         p, gx, gy, dry, released = _project(c, stab, us, vs, fs=fs, passes=1)
-        d = pj.apply_divergence(n, rows, cols, cx, cy, us - 1e-6 * gx, vs - 1e-6 * gy)
+        d = po.apply_divergence(n, rows, cols, cx, cy, us - 1e-6 * gx, vs - 1e-6 * gy)
         solved = np.concatenate((~fs, p[nf:] != 0))
         left.append(np.sqrt(np.mean(d[solved] ** 2) / np.mean(d0[solved] ** 2)))
     # the default ε = 0.01 removes ~90 % of a smooth field's divergence in one projection; at

@@ -579,7 +579,7 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
 @njit(cache=True)
 def pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, mic=0.0):
     """:func:`pcg_dic` on a matrix given as its two triangles and diagonal (:func:`split_triangles`'
-    layout; e.g. the adjoint-pair PPE assembled that way, :func:`projection.assemble_adjoint_triangles`)."""
+    layout; e.g. the adjoint-pair PPE assembled that way, :func:`ppe_operator.assemble_adjoint_triangles`)."""
     n = b.size
     thresh = max(atol, rtol * math.sqrt(_dot(b, b)))
     x = x0.copy()
@@ -1014,7 +1014,7 @@ def _two_level_setup(indptr, indices, data):
 # ------------------------------------------------------------------------------------------------
 # Two-level CG on the matrix-free adjoint-pair PPE (``numerics.ppe_operator: matrix_free``)
 #
-# The operator is :func:`projection.matrix_free_ppe`'s op = (wd, D_U by row, D_U by particle, ε L_c);
+# The operator is :func:`ppe_operator.matrix_free_ppe`'s op = (wd, D_U by row, D_U by particle, ε L_c);
 # A x = wd D_U (D_Uᵀ x) + ε L_c x, both products as gathers (D_Uᵀ x by particle, then D_U by row),
 # each output entry written by one prange iteration (no reductions: the same iterates on any number
 # of threads). The preconditioner is the additive two-level one of :func:`pcg_two_level` (Jacobi +
@@ -1240,7 +1240,7 @@ def _pcg_free_loop(op, x, r, dinv, thresh, maxiter, lc, lct, agg):
 
 
 def pcg_two_level_free(op, b, x0, rtol, atol, maxiter, coarse_max=FREE_COARSE_MAX):
-    """Solve A x = b for the matrix-free PPE operator ``op`` (:func:`projection.matrix_free_ppe`)
+    """Solve A x = b for the matrix-free PPE operator ``op`` (:func:`ppe_operator.matrix_free_ppe`)
     by the two-level CG above, warm-started from x0. Same stopping test (‖r‖ < max(rtol ‖b‖, atol),
     recursive residual), return convention and breakdown codes as :func:`pcg_two_level`."""
     n = b.size

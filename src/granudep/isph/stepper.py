@@ -43,8 +43,8 @@ from .errors import IsphBlowUp
 from .heap import keep_freed_memory
 from .linear_systems import LinearSystems
 from .linsolve import pin_blas_to_one_thread
-from .projection import (adjoint_divergence, adjoint_pair_geometry, adjoint_pair_projection, apply_gradient,
-                         divergence_entries, wall_normal_acceleration)
+from .ppe_operator import apply_gradient, wall_normal_acceleration
+from .projection import adjoint_divergence, adjoint_pair_geometry, adjoint_pair_projection, divergence_entries
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
 from .setup import Particles, lattice_constants, reference_concentration, reference_laplacian_sum
 from .state import ParticleState
