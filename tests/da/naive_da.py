@@ -108,7 +108,8 @@ def stage(x, u, V, L, tab, p, depb, dxg, k_state=None):
         kdA, kbar = symmetric_pressure(x, V, L, p.kernel_support, p.back_wall, k)
         dh = (kdA - kbar * h * b[T_DWIDTH]) / b[T_WIDTH]
         k = np.ones_like(k)
-    gb = (deposit_slope(x, V, depb, dxg, L, p.kernel_support, p.back_wall) if p.deposition and p.deposit_as_bed
+    # the deposit is known per grid cell: its kernel is never narrower than a cell
+    gb = (deposit_slope(x, V, depb, dxg, max(L, dxg), p.kernel_support, p.back_wall) if p.deposition and p.deposit_as_bed
           else np.zeros_like(x))
     a = gs - k * gc * dh - gc * gb
     live = V > 0.0

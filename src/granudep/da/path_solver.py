@@ -45,7 +45,8 @@ from ..front import MAIN_RUN_FRACTION, main_run_front
 from .path import N_TABLE, T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
 from .solver import (AT_REST, ESCAPED, F_K, F_ND, F_U, F_V, F_V0, MAX_STEPS, N_FIELDS, NONFINITE, RUNNING,  # noqa: F401
                      grid_depth, particle_depths, smooth_deposit, smoothing_length, step_params)
-from .step import D_DEFICIT, D_LIFT, D_WHERE, E_H, E_T, E_U, advance, mark_envelopes, own_trail  # noqa: F401
+from .step import (D_DEFICIT, D_LIFT, D_WHERE, E_H, E_T, E_U, advance, deposit_smoothing_length,  # noqa: F401
+                   mark_envelopes, own_trail)
 
 # time_step 'relative': |u| Δt <= CFL · GEOMETRY_STEP · σ (σ the path's smoothing length)
 GEOMETRY_STEP = 0.25
@@ -164,7 +165,7 @@ def _record(rec, cfg, setup, x, F, order, dep, t, L, dt, steps, dxg, ng, width_c
         arr[order] = vals
         getattr(rec, name).append(arr)
     flow = grid_depth(x, F[F_V], L, qc, wall, dxg, ng) / width_c
-    depo = smooth_deposit(dep, L, qc, dxg) / width_c
+    depo = smooth_deposit(dep, deposit_smoothing_length(L, dxg), qc, dxg) / width_c
     rec.flow_depth.append(flow)
     rec.deposit_depth.append(depo)
     rec.deposited_volume.append(float(np.sum(dep)))

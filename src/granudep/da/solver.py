@@ -29,7 +29,8 @@ import numpy as np
 from .path import N_TABLE, T_A, T_B, T_COS, T_KACT, T_KPASS, T_SIN, T_WIDTH
 from .sph import (F_H, F_K, F_ND, F_U, F_V, F_V0, N_FIELDS, deposit_gradient, evaluate, grid_depth,  # noqa: F401
                   particle_depths)
-from .step import AT_REST, ESCAPED, MAX_STEPS, NONFINITE, RUNNING, StepParams, advance, own_trail, smoothing_length
+from .step import (AT_REST, ESCAPED, MAX_STEPS, NONFINITE, RUNNING, StepParams, advance, deposit_smoothing_length,
+                   own_trail, smoothing_length)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -186,7 +187,7 @@ def _record(rec, cfg, x, F, order, dep, t, L, dt, steps, dxg, ng, thr):
         arr[order] = vals
         getattr(rec, name).append(arr)
     flow = grid_depth(x, F[F_V], L, qc, wall, dxg, ng)
-    depo = smooth_deposit(dep, L, qc, dxg)
+    depo = smooth_deposit(dep, deposit_smoothing_length(L, dxg), qc, dxg)
     rec.flow_depth.append(flow)
     rec.deposit_depth.append(depo.copy())
     rec.front.append(main_run_front(rec.x_edges, flow + depo, thr))
