@@ -246,3 +246,27 @@ def test_incomplete_run_noted_in_coefficients():
     row = regress(ds)["coefficients"].iloc[0]
     assert "did not reach rest" in row.note and np.isfinite(row.A)  # fitted, but flagged
     assert regress(make_sections()[0])["coefficients"].note.iloc[0] == ""
+
+
+def test_diagnosis_reads_hu_at_the_papers_critical_times_for_a_table3_case():
+    from granudep.regress.diagnose import diagnose_case
+    ds, truth = make_sections(case="T22-A70")
+    ds["flow_depth"] = 0.0 * ds["deposit_depth"] + 0.1
+    rows, _ = diagnose_case(ds)
+    row = next(r for r in rows if r["variant"] == "paper t_C")
+    t3 = cases.table3().set_index("case_id").loc["T22-A70"]
+    xs = np.array([0.2, 0.4, 0.6, 0.8])
+    k = np.rint(xs * 10).astype(int)
+    T = np.array([t3[f"xM_{x}"] for x in xs])
+    # planted: hu/p0 = mc + c (t_rule - t_s) at each section, read at the paper's times
+    y = truth["mc"][k] + 0.02 * (truth["t_rule"][k] - T)
+    A, B = np.polyfit(xs, y, 1)
+    assert row["n_sections"] == 4
+    assert row["A"] == pytest.approx(A, rel=1e-3) and row["B"] == pytest.approx(B, rel=1e-3)
+    # the baseline on the same four sections is the planted line
+    assert "A -0.0300, B 0.0400" in row["note"]
+    # a case the paper's Table 3 does not list gets no such row
+    ds2 = make_sections(case="T22-A45")[0]
+    ds2["flow_depth"] = 0.0 * ds2["deposit_depth"] + 0.1
+    rows2, _ = diagnose_case(ds2)
+    assert not any(r["variant"] == "paper t_C" for r in rows2)

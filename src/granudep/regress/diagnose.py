@@ -15,6 +15,10 @@ time, from the same monitoring sections:
 * ``x_inf v99``: [x] renormalised with x∞ = the 2D run's 1 % volume front instead of its 2 d front
   (section placement: the thin tail sets x∞);
 * ``W_M = k dx``: hu/p0 from the W_M sensitivity file at the same onset (k = 1, 3, 4).
+* ``paper t_C`` (the cases of Table 3): (hu)_C read at the paper's critical times on the sections
+  nearest [x] = 0.2, 0.4, 0.6, 0.8; the note gives the baseline's A, B on the same four sections.
+  Not a reading of eq 36 but an attribution test: how much of the difference in A, B comes from
+  *when* the momentum is read (our critical times against Table 3's) rather than from the momentum.
 
 Beside A, B, R²: the mean and range of the fitted (hu)_C/p0 (a small range next to the RMS residual
 means a line in [x] has little to explain) and ``x_norm_zero`` = −B/A, where the line crosses zero.
@@ -66,6 +70,15 @@ def _fit_row(case, theta, a, variant, x, y, note="", min_sections=3) -> tuple[di
                    # where the line's (hu)_C crosses zero (eq 34 deposits nothing beyond it)
                    x_norm_zero=float(-B / A) if A != 0 else math.nan)
     return row, np.column_stack([x, y, resid]) if x.size else np.zeros((0, 3))
+
+
+def _paper_critical_times(case: str) -> dict[float, float] | None:
+    """Table 3's (t_s)_C / t_c by [x] for a case the paper lists, else None."""
+    t3 = cases.table3()
+    row = t3[t3["case_id"] == case]
+    if row.empty:
+        return None
+    return {x: float(row[f"xM_{x}"].iloc[0]) for x in (0.2, 0.4, 0.6, 0.8)}
 
 
 def diagnose_case(sections: xr.Dataset, isph: xr.Dataset | None = None, wm: xr.Dataset | None = None,
@@ -126,6 +139,16 @@ def diagnose_case(sections: xr.Dataset, isph: xr.Dataset | None = None, wm: xr.D
         sel = (xn2 >= -1e-9) & (xn2 <= 1 + 1e-9)
         rows.append(_fit_row(case, th, a, "x_inf v99", xn2[sel], base[sel],
                              note=f"x_inf {x_inf:.3f} -> {xv:.3f} m")[0])
+    paper = _paper_critical_times(case)
+    if paper is not None:
+        # the attribution test: (hu)_C read at the paper's Table 3 critical times, at the sections
+        # nearest [x] = 0.2 ... 0.8; the baseline on the same four sections beside it
+        k4 = [int(np.argmin(np.abs(xn - x))) for x in paper]
+        if all(abs(xn[k] - x) < 0.05 for k, x in zip(k4, paper)):
+            y = np.array([value_at(t_s, mom[k], t) for k, t in zip(k4, paper.values())])
+            A4, B4 = linear_fit(xn[k4], base[k4])[:2]
+            rows.append(_fit_row(case, th, a, "paper t_C", xn[k4], y,
+                                 note=f"(hu)_C at Table 3's times; ours on these sections: A {A4:.4f}, B {B4:.4f}")[0])
     if wm is not None and "momentum_norm" in wm:
         for w in wm["width_factor"].values:
             if math.isclose(float(w), float(at.get("width_factor", 2.0))):
