@@ -9,7 +9,8 @@ import synthetic_data as syn
 from granudep import cases
 from granudep.cli import main
 from granudep.io import var
-from granudep.report.da_vs_reference import compare, reading_matrix, reference_from_isph, select_converged_runs
+from granudep.report.da_vs_reference import compare, reading_matrix
+from granudep.report.reference_2d import reference_from_isph, select_converged_runs
 from granudep.report.readme_status import status_block
 
 L0 = 0.2

@@ -7,7 +7,8 @@ import pytest
 import synthetic_data as syn
 from granudep import cases
 from granudep.cli import main
-from granudep.report.da_vs_reference import compare, improvement, load_reference, max_errors, reference_from_isph, report_text
+from granudep.report.da_vs_reference import compare, improvement, max_errors, report_text
+from granudep.report.reference_2d import load_reference, reference_from_isph
 from granudep.config import ConfigError
 
 

@@ -8,8 +8,8 @@ import pytest
 
 import synthetic_data as syn
 from granudep.report.claims import paper_claims, scorecard, verdict
-from granudep.report.da_vs_reference import (compare, da_reading, matrix_maxima, reading_matrix, reference_from_isph,
-                              select_reference_runs)
+from granudep.report.da_vs_reference import compare, da_reading, matrix_maxima, reading_matrix
+from granudep.report.reference_2d import reference_from_isph, select_reference_runs
 from granudep.report.da_vs_reference import PAPER_MAX_ERRORS
 from granudep.da.deposition import self_consistent
 

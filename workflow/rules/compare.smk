@@ -187,11 +187,11 @@ rule da_readings:
 def _converged_runs():
     if not REFERENCE_EXTRA:
         return {}
-    from granudep.report.da_vs_reference import select_reference_runs
+    from granudep.report.reference_2d import select_reference_runs
     own = [f"{RESULTS}/isph/{REFERENCE_2D[c]}.nc" for c in DA_CASES]
     have = [p for p in own if os.path.exists(p)]
     if REFERENCE_SELECT == "converged":
-        from granudep.report.da_vs_reference import select_converged_runs
+        from granudep.report.reference_2d import select_converged_runs
         chosen = [p for p, _, ok in select_converged_runs(have, REFERENCE_EXTRA, REFERENCE_TOL, REFERENCE_MEASURE) if ok]
     else:
         chosen = select_reference_runs(REFERENCE_EXTRA + have, REFERENCE_DX)

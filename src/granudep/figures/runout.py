@@ -14,7 +14,8 @@ import numpy as np
 import pandas as pd
 
 from .. import cases
-from ..report.da_vs_reference import READINGS, da_reading, load_reference, match_table5
+from ..report.da_vs_reference import READINGS, da_reading
+from ..report.reference_2d import load_reference, match_table5
 from ..config import ConfigError
 from .common import (add_inputs, case_of, classify, front_note, hide_unused, load, load_table, need, new_figure,
                      note, panel_label, register)
@@ -122,7 +123,7 @@ def fig16(compare_table):
                                    "reference_final_runout_norm", "runout_rel_error", "flow_time",
                                    "reference_flow_time", "flow_time_rel_error"), "fig16 compare CSV")
     if "reference" not in t.columns:
-        from ..report.da_vs_reference import source_label
+        from ..report.reference_2d import source_label
         t = t.assign(reference=[source_label(p) for p in t["provenance"]])
     t = t[t["reference"] != "no reference"]
     if t.empty:

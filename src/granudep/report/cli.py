@@ -9,11 +9,11 @@ from . import readme_status, sensitivity_table
 
 
 def _cmd_reference(args) -> int:
-    from .da_vs_reference import reference_from_isph, select_reference_runs
+    from .reference_2d import reference_from_isph, select_reference_runs
     from ..io import write_text
     runs, basis = list(args.runs), None
     if args.converged:
-        from .da_vs_reference import select_converged_runs
+        from .reference_2d import select_converged_runs
         picked = select_converged_runs(runs, args.ladder or [], tol=args.tolerance, measure=args.measure)
         runs, basis = [p for p, _, _ in picked], [(b, c) for _, b, c in picked]
         for p, b, _ in picked:

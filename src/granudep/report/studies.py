@@ -13,7 +13,7 @@ from .markdown import md_table, not_available, open_lazily, read_csv
 def _study_rows_isph(folder: Path, dx=None) -> pd.DataFrame:
     """One row per 2D run in ``folder``; with ``dx`` (m) only the runs at those resolutions (the
     configured list: a run left over from an earlier list is not a convergence result)."""
-    from .da_vs_reference import reference_row
+    from .reference_2d import reference_row
     rows = []
     for f in sorted(folder.glob("*.nc")):
         with open_lazily(f) as ds:

@@ -77,7 +77,7 @@ def section_compare(compare) -> str:
     if df is None:
         return "\n".join(out) + not_available("comparison table", compare)
     if "reference" not in df.columns:
-        from .da_vs_reference import source_label
+        from .reference_2d import source_label
         df["reference"] = [source_label(p) for p in df["provenance"]]
     out.append(f"Source: `{compare}`. Relative error = (computed − reference)/reference. Runout ΔL/L0 from the gate.\n")
     show = df.copy()
