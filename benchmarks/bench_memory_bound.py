@@ -92,7 +92,7 @@ def main(argv=None) -> None:
     ap.add_argument("--dx", default="2,1", help="bench resolutions in mm (4, 2, 1)")
     ap.add_argument("--repeats", type=int, default=20)
     a = ap.parse_args(argv)
-    from granudep.isph import linsolve
+    from granudep.isph import cg_two_level, linsolve
     linsolve.pin_blas_to_one_thread()
     threads = [t for t in (1, 2) if t <= numba.config.NUMBA_NUM_THREADS]
     n = 8_000_000
@@ -117,9 +117,9 @@ def main(argv=None) -> None:
             f = (lambda: linsolve.csr_matvec(ip, ix, d, g, out)) if t == 1 else (lambda: _matvec_parallel(ip, ix, d, g, out))
             f()
             best, med = _best(f, a.repeats)
-            linsolve.pcg_two_level(ip, ix, d, b, g, 1e-8, 0.0, 1000)
+            cg_two_level.pcg_two_level(ip, ix, d, b, g, 1e-8, 0.0, 1000)
             t0 = time.perf_counter()
-            _, it, info = linsolve.pcg_two_level(ip, ix, d, b, g, 1e-8, 0.0, 1000)
+            _, it, info = cg_two_level.pcg_two_level(ip, ix, d, b, g, 1e-8, 0.0, 1000)
             solve = time.perf_counter() - t0
             floor = it * bytes_a / (triad[t] * 1e9)
             print(f"dx={dxmm} mm, {nrow} unknowns, {nnz} entries ({nnz / nrow:.0f}/row, {bytes_a / 1e6:.0f} MB), "

@@ -6,8 +6,9 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from granudep.isph.deflation import _sgs_with_product, coarse_operators, pcg_ssor_deflated
-from granudep.isph.linsolve import (BREAKDOWN, NONFINITE, aggregate_nodes, aggregate_rows, coarse_factor, pcg_dic_split,
-                                    split_triangles)
+from granudep.isph.cg_dic import pcg_dic_split, split_triangles
+from granudep.isph.cg_two_level import aggregate_nodes, aggregate_rows, coarse_factor
+from granudep.isph.linsolve import BREAKDOWN, NONFINITE
 
 from test_linsolve import _particle_matrix
 

@@ -10,8 +10,8 @@ from granudep.isph import linear_systems as linear_mod
 from granudep.isph import stepper
 from granudep.isph.api import run_isph
 from granudep.isph.config import load_config
-from granudep.isph.linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi,
-                                    pcg_jacobi_pair)
+from granudep.isph.cg_dic import pcg_dic, pcg_dic_pair
+from granudep.isph.linsolve import BREAKDOWN, NONFINITE, pcg_jacobi, pcg_jacobi_pair
 from granudep.isph.errors import IsphBlowUp
 from granudep.isph.stepper import IsphSolver
 

@@ -8,9 +8,9 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from granudep.isph.linsolve import (BREAKDOWN, NONFINITE, _two_level_apply, aggregate_nodes, coarse_matrix,
-                                    csr_matvec, dic_diagonal, mic_diagonal, pcg_dic, pcg_dic_pair, pcg_jacobi,
-                                    pcg_jacobi_pair, pcg_two_level, split_triangles)
+from granudep.isph.cg_dic import dic_diagonal, mic_diagonal, pcg_dic, pcg_dic_pair, split_triangles
+from granudep.isph.cg_two_level import aggregate_nodes, coarse_matrix, pcg_two_level
+from granudep.isph.linsolve import BREAKDOWN, NONFINITE, _two_level_apply, csr_matvec, pcg_jacobi, pcg_jacobi_pair
 from granudep.isph.neighbours import build_neighbours
 
 
@@ -272,7 +272,7 @@ def test_dic_pair_equals_two_single_dic_solves_bitwise():
 
 def test_dic_two_threads_equals_the_pair_bitwise():
     """pcg_dic_two (u and v as two pcg_dic solves, one per thread) gives the pair's results bit for bit."""
-    from granudep.isph.linsolve import pcg_dic_two
+    from granudep.isph.cg_dic import pcg_dic_two
     indptr, indices, data = _particle_matrix(shift=0.05)
     n = indptr.size - 1
     rng = np.random.default_rng(12)

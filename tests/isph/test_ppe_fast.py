@@ -11,8 +11,9 @@ from granudep.config import ConfigError
 from granudep.isph import ppe_operator as po
 from granudep.isph import projection as pj
 from granudep.isph.config import load_config
-from granudep.isph.linsolve import (free_coarse_matrix, free_aggregates, free_diagonal, free_matvec, pcg_dic,
-                                    pcg_dic_split, pcg_two_level, pcg_two_level_free, split_triangles)
+from granudep.isph.cg_dic import pcg_dic, pcg_dic_split, split_triangles
+from granudep.isph.cg_two_level import (free_coarse_matrix, free_aggregates, free_diagonal, free_matvec,
+                                        pcg_two_level, pcg_two_level_free)
 
 import test_projection as tp
 

@@ -26,7 +26,7 @@ to one pass over the matrix:
   A z = A y − A Q A y needs no product with A, and q = A p follows from p = z + β p_old as
   q = A z + β q_old.
 
-Same stopping test as :func:`linsolve.pcg_dic_split`: ‖b − A x‖ < max(atol, rtol ‖b‖) for the
+Same stopping test as :func:`cg_dic.pcg_dic_split`: ‖b − A x‖ < max(atol, rtol ‖b‖) for the
 true residual, checked once the recurrence's residual passes it (a failed check restarts the
 iteration from the true residual). Same return convention. The set-up (aggregation, A P, A_c and its
 Cholesky factor) is done on every call: the matrix changes every step. Above ``COARSE_MAX``
@@ -49,8 +49,9 @@ import math
 import numpy as np
 from numba import njit
 
-from .linsolve import (BREAKDOWN, NONFINITE, _dot, _split_residual, aggregate_rows, coarse_factor, coarse_solve,
-                       pcg_dic_split)
+from .cg_dic import _split_residual, pcg_dic_split
+from .cg_two_level import aggregate_rows, coarse_factor
+from .linsolve import BREAKDOWN, NONFINITE, _dot, coarse_solve, stop_threshold
 
 #: above this many aggregates the dense coarse Cholesky (n_c³ / 3 flops per step) is not set up
 #: and the solve falls back to the SSOR-CG without deflation (~170 000 unknowns at ~70 per aggregate)
@@ -171,7 +172,7 @@ def pcg_ssor_deflated(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, 
     lc, lct, ok = coarse_factor(ac)
     if not ok:
         return x0.copy(), 0, BREAKDOWN
-    thresh = max(atol, rtol * nb)
+    thresh = stop_threshold(nb, rtol, atol)
     dinv = 1.0 / diag
     x = x0.copy()
     r = np.empty(n)

@@ -20,8 +20,9 @@ import scipy.sparse.linalg as spla
 from ..progress import LOG
 from .deflation import pcg_ssor_deflated
 from .errors import IsphBlowUp
-from .linsolve import (BREAKDOWN, NONFINITE, pcg_dic, pcg_dic_pair, pcg_jacobi, pcg_jacobi_pair, pcg_two_level,
-                       pcg_two_level_free)
+from .cg_dic import pcg_dic, pcg_dic_pair
+from .cg_two_level import pcg_two_level, pcg_two_level_free
+from .linsolve import BREAKDOWN, NONFINITE, pcg_jacobi, pcg_jacobi_pair
 
 #: CG preconditioner of each CG pressure solver (any other CG name: Jacobi)
 CG_PRECONDITIONERS = {"cg_dic": "dic", "cg_two_level": "two_level", "cg_ssor": "ssor"}

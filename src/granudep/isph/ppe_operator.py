@@ -314,7 +314,7 @@ def matrix_free_operator(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n
     Returns op = (wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval): D_U by
     unknown row (columns: particles) and by particle (rows: unknown indices), both CSR, wd = 1 − ε;
     ε L_c restricted to the unknowns by row with its diagonal first (``lval`` holds ε a_e; the
-    diagonal sums the edges to known nodes too). See :func:`linsolve.free_matvec`."""
+    diagonal sums the edges to known nodes too). See :func:`cg_two_level.free_matvec`."""
     wd = 1.0 - stab
     # D_U by unknown row and by particle
     rptr = np.zeros(n_unknown + 1, np.int64)
@@ -403,9 +403,9 @@ def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unkn
 @njit(cache=True, nogil=True)
 def adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown):
     """The matrix of :func:`assemble_adjoint_ppe` as its strict lower and upper triangles and its
-    diagonal, in :func:`linsolve.split_triangles`' layout (uint64 row pointers, uint32 columns, the
+    diagonal, in :func:`cg_dic.split_triangles`' layout (uint64 row pointers, uint32 columns, the
     lower rows by ascending and the upper rows by descending column); for the SSOR-preconditioned
-    CG (``numerics.pressure_solver: cg_ssor``, :func:`linsolve.pcg_dic_split`). It does not depend on
+    CG (``numerics.pressure_solver: cg_ssor``, :func:`cg_dic.pcg_dic_split`). It does not depend on
     the right-hand side, so it can be built before u* is known (:func:`adjoint_pair_geometry`).
 
     Only the upper triangle is computed (the product is symmetric): row a takes, for each particle
