@@ -130,7 +130,9 @@ class Deposition:
 @dataclass(frozen=True)
 class Output:
     dt_output: float = param(0.02, gt=0.0, unit="s", doc="interval between stored states")
-    dx_grid: float = param(1e-3, gt=0.0, unit="m", doc="cell size of the fixed grid (profiles, deposit, front)")
+    dx_grid: float = param(1e-3, gt=0.0, unit="m", doc="cell size of the fixed grid (profiles, deposit, front); "
+                           "with deposition at most the smoothing length at release (B x release spacing), "
+                           "so that the deposit is resolved as the particles are (da.solver.grid_spacing)")
     front_depth_threshold: float | None = param(None, gt=0.0, unit="m", doc="front threshold; null: 2 d")
     flow_time_tolerance: float = param(1e-3, gt=0.0, unit="m", doc="front advance below which the flow is at rest")
     progress_every_s: float = param(5.0, gt=0.0, unit="s", doc="wall seconds between progress lines")

@@ -22,7 +22,7 @@ def to_dataset(cfg, rec, *, deposition: bool, physics, A=float("nan"), B=float("
     g = cfg.geometry
     time = np.asarray(rec.time, dtype=float)
     front = np.asarray(rec.front, dtype=float)
-    dxg = cfg.output.dx_grid
+    dxg = float(rec.x_edges[1] - rec.x_edges[0])   # the grid the run used (solver.grid_spacing)
     flow = np.asarray(rec.flow_depth)
     depo = np.asarray(rec.deposit_depth)
     total = flow + depo

@@ -206,7 +206,7 @@ def to_path_dataset(cfg, setup: PathSetup, rec, *, deposition: bool, ab_source: 
     o = setup.origin
     time = np.asarray(rec.time, dtype=float)
     front_s = np.asarray(rec.front, dtype=float) + o
-    dxg = cfg.output.dx_grid
+    dxg = float(rec.x_edges[1] - rec.x_edges[0])   # the grid the run used (solver.grid_spacing)
     flow = np.asarray(rec.flow_depth)
     depo = np.asarray(rec.deposit_depth)
     ng = flow.shape[1]

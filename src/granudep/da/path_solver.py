@@ -44,7 +44,7 @@ import numpy as np
 from ..front import MAIN_RUN_FRACTION, main_run_front
 from .path import N_TABLE, T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
 from .solver import (AT_REST, ESCAPED, F_K, F_ND, F_U, F_V, F_V0, MAX_STEPS, N_FIELDS, NONFINITE, RUNNING,  # noqa: F401
-                     grid_depth, particle_depths, smooth_deposit, smoothing_length, step_params)
+                     grid_depth, grid_spacing, particle_depths, smooth_deposit, smoothing_length, step_params)
 from .step import (D_DEFICIT, D_LIFT, D_WHERE, E_H, E_T, E_U, advance, deposit_smoothing_length,  # noqa: F401
                    mark_envelopes, own_trail)
 
@@ -139,7 +139,7 @@ def path_params(cfg, setup: PathSetup, phys, centripetal: bool):
     """The constant-θ ``StepParams`` with the path's stations, gate, scale and options."""
     from ..cases import momentum_scale
     dep = cfg.deposition
-    return step_params(cfg, phys)._replace(
+    return step_params(cfg, phys, grid_spacing(cfg, setup.dx0, phys.deposition))._replace(
         x_min=0.0, x_max=float(setup.xi_end), L0=float(setup.xi_gate),
         x_inf=float(phys.x_inf) if phys.deposition else float(setup.xi_gate) + 1.0,
         momentum_scale=(float(momentum_scale(setup.H0, setup.theta_release)) if dep.coefficient_units == "normalised"
@@ -197,7 +197,8 @@ def simulate_path(cfg, setup: PathSetup, phys, tab: np.ndarray, label: str = "",
         x, F, order = initial_path_state(setup)
     else:
         x, F, order = custom_state(*init)
-    dxg = cfg.output.dx_grid
+    prm = path_params(cfg, setup, phys, cent)
+    dxg = prm.dx_grid
     ng, edges, centres, width_c = _grid(setup, dxg)
     dep = np.zeros(ng)
     depb = np.zeros(ng)
@@ -205,7 +206,6 @@ def simulate_path(cfg, setup: PathSetup, phys, tab: np.ndarray, label: str = "",
     env = np.zeros((3, ng))
     env[E_T] = np.inf
     diag = np.zeros(3)
-    prm = path_params(cfg, setup, phys, cent)
     own = own_trail(x.shape[0], prm.deposition and prm.deposit_as_bed and not prm.own_deposit)
     rec = PathRecord(x_edges=edges, x_inf=phys.x_inf, A=phys.A, B=phys.B, envelopes=env, diag=diag)
     thr = cfg.front_threshold
