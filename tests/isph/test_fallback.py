@@ -1,6 +1,8 @@
 """The linear solver never crashes a run: a CG breakdown (zero/negative curvature,
 NaN, a ZeroDivisionError, no convergence) falls back to SuperLU for that step and is counted in
 the run file (``linear_solver_fallbacks``)."""
+import types
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -81,14 +83,14 @@ def _solver():
     return IsphSolver(load_config("T22-A70", dx=0.01, t_end=0.05))
 
 
-@pytest.mark.parametrize("method", ["dic", "jacobi", "two_level"])
+@pytest.mark.parametrize("method", ["cg_dic", "cg", "cg_two_level"])
 def test_solver_falls_back_to_direct_on_an_indefinite_matrix(method):
     s = _solver()
     indptr, indices, data = _indefinite()
     n = indptr.size - 1
     b = np.random.default_rng(2).standard_normal(n)
-    x = s.linear.solve_cg(indptr, indices, data, b, np.zeros(n), "ppe", method=method)
-    dic = method == "dic"
+    x = s.linear.solve_cg(indptr, indices, data, b, np.zeros(n), "ppe", solver=method)
+    dic = method == "cg_dic"
     exact = spla.spsolve(_dense(indptr, indices, data).tocsc(), b)
     assert s.stats.fallbacks == 1
     assert np.abs(x - exact).max() < 1e-9 * np.abs(exact).max()
@@ -158,7 +160,7 @@ def test_singular_direct_solve_is_a_blow_up_not_a_crash():
     indices = np.array([0, 1, 1, 0])
     data = np.array([1.0, 1.0, 1.0, 1.0])  # [[1, 1], [1, 1]]: exactly singular
     with pytest.raises(IsphBlowUp, match="direct solver failed"):
-        s.linear.solve_cg(indptr, indices, data, np.array([1.0, 0.0]), np.zeros(2), "ppe", method="dic")
+        s.linear.solve_cg(indptr, indices, data, np.array([1.0, 0.0]), np.zeros(2), "ppe", solver="cg_dic")
     assert s.stats.fallbacks == 1
 
 
@@ -181,3 +183,18 @@ def test_amg_without_pyamg_is_a_clear_error(monkeypatch):
     monkeypatch.setattr(amg, "have_pyamg", lambda: False)
     with pytest.raises(ImportError, match="pyamg"):
         IsphSolver(load_config("T22-A70", dx=0.01, **{"numerics.pressure_solver": "amg_sa"}))
+
+
+def test_every_cg_pressure_solver_name_has_a_registry_entry():
+    """The names numerics.pressure_solver accepts and the CG registry agree: a CG name the config
+    allows but the registry lacks would fail at the first solve, not at the edge."""
+    import dataclasses
+    from granudep.isph.config import Numerics
+    from granudep.isph.linear_systems import CG_SOLVERS, ppe_solver_name
+    choices = next(f for f in dataclasses.fields(Numerics) if f.name == "pressure_solver").metadata["choices"]
+    cg_names = [c for c in choices if c != "direct" and not c.startswith("amg_")]
+    assert cg_names and set(cg_names) <= set(CG_SOLVERS)
+    for projection in ("adjoint_pair", "approximate"):
+        for c in cg_names:
+            num = types.SimpleNamespace(pressure_solver=c, projection=projection)
+            assert ppe_solver_name(num) in CG_SOLVERS

@@ -3,7 +3,7 @@
 
 * the PPE solver a user names (``numerics.pressure_solver``) is resolved in one place,
   :func:`ppe_solver_name` (``cg_dic`` runs as ``cg_ssor`` on the adjoint pair, whose operator has no
-  incomplete Cholesky), and its preconditioner comes from one table, ``CG_PRECONDITIONERS``;
+  incomplete Cholesky), and the CG that runs for each name comes from one registry, ``CG_SOLVERS``;
 * one fallback rule for every CG: a breakdown, an exception, a non-finite solution or no convergence
   in 1000 iterations gives a SuperLU solve of the same system, counted in ``stats.fallbacks``
   (:meth:`LinearSystems.fallback`, :meth:`LinearSystems.why`); a singular direct solve is a blow-up.
@@ -24,8 +24,27 @@ from .cg_dic import pcg_dic, pcg_dic_pair
 from .cg_two_level import pcg_two_level, pcg_two_level_free
 from .linsolve import BREAKDOWN, NONFINITE, pcg_jacobi, pcg_jacobi_pair
 
-#: CG preconditioner of each CG pressure solver (any other CG name: Jacobi)
-CG_PRECONDITIONERS = {"cg_dic": "dic", "cg_two_level": "two_level", "cg_ssor": "ssor"}
+def _cg_jacobi(indptr, indices, data, rhs, guess, rtol, numerics):
+    return pcg_jacobi(indptr, indices, data, rhs, guess, rtol, 0.0, 1000)
+
+
+def _cg_dic(indptr, indices, data, rhs, guess, rtol, numerics):
+    return pcg_dic(indptr, indices, data, rhs, guess, rtol, 0.0, 1000, numerics.ic_modification)
+
+
+def _cg_ssor(indptr, indices, data, rhs, guess, rtol, numerics):
+    return pcg_dic(indptr, indices, data, rhs, guess, rtol, 0.0, 1000, -1.0)
+
+
+def _cg_two_level(indptr, indices, data, rhs, guess, rtol, numerics):
+    return pcg_two_level(indptr, indices, data, rhs, guess, rtol, 0.0, 1000)
+
+
+#: the CG that runs for each assembled-system solver name (``numerics.pressure_solver`` after
+#: :func:`ppe_solver_name`): f(indptr, indices, data, rhs, guess, rtol, numerics) -> (x, iterations,
+#: info) with info 0 on convergence (the :mod:`.linsolve` return convention). A new solver is one
+#: such function, one line here and its name in ``numerics.pressure_solver``'s choices.
+CG_SOLVERS = {"cg": _cg_jacobi, "cg_dic": _cg_dic, "cg_ssor": _cg_ssor, "cg_two_level": _cg_two_level}
 
 
 def ppe_solver_name(numerics) -> str:
@@ -62,8 +81,7 @@ class LinearSystems:
         # positive off-diagonal entries: incomplete Cholesky (modified or not) meets non-positive
         # pivots on it (Newtonian film, ε = 0.01: every step); its preconditioned solver is the
         # two-level CG (Jacobi + aggregation coarse space, iterations independent of dx)
-        return self.solve_cg(indptr, indices, data, rhs, guess, "ppe",
-                             method=CG_PRECONDITIONERS.get(ppe_solver_name(self.owner.cfg.numerics), "jacobi"))
+        return self.solve_cg(indptr, indices, data, rhs, guess, "ppe", solver=ppe_solver_name(self.owner.cfg.numerics))
 
     @property
     def ppe_form(self) -> str:
@@ -140,20 +158,14 @@ class LinearSystems:
             return self.fallback(indptr, indices, data, rhs, "ppe", why)
         return sol
 
-    def solve_cg(self, indptr, indices, data, rhs, guess, kind, method="jacobi"):
-        """CG, warm-started: Jacobi-preconditioned (numba, :mod:`.linsolve`: scipy's cg iteration
-        bit for bit), DIC-preconditioned (``method="dic"``) or two-level (``"two_level"``: Jacobi +
-        aggregation coarse space); SuperLU if it breaks down, raises, returns a non-finite solution
-        or does not converge in 1000 iterations."""
-        rtol = self.owner.cfg.numerics.solver_rtol
+    def solve_cg(self, indptr, indices, data, rhs, guess, kind, solver="cg"):
+        """The CG of ``CG_SOLVERS[solver]`` (``cg``: Jacobi, scipy's iterates bit for bit; ``cg_dic``,
+        ``cg_ssor``: Eisenstat; ``cg_two_level``: Jacobi + aggregation coarse space), warm-started;
+        SuperLU if it breaks down, raises, returns a non-finite solution or does not converge in 1000
+        iterations."""
+        num = self.owner.cfg.numerics
         try:
-            if method in ("dic", "ssor"):
-                sol, it, info = pcg_dic(indptr, indices, data, rhs, guess, rtol, 0.0, 1000,
-                                        -1.0 if method == "ssor" else self.owner.cfg.numerics.ic_modification)
-            elif method == "two_level":
-                sol, it, info = pcg_two_level(indptr, indices, data, rhs, guess, rtol, 0.0, 1000)
-            else:
-                sol, it, info = pcg_jacobi(indptr, indices, data, rhs, guess, rtol, 0.0, 1000)
+            sol, it, info = CG_SOLVERS[solver](indptr, indices, data, rhs, guess, num.solver_rtol, num)
         except (ZeroDivisionError, FloatingPointError, np.linalg.LinAlgError) as exc:
             sol, it, info = guess, 0, BREAKDOWN
             LOG.warning("isph %s: %s CG raised %r", self.owner.cfg.case, kind, exc)
