@@ -134,7 +134,8 @@ def step(x, u, V, V0, nd_prev, dep, depb, binv, p, tab, k_state=None):
         L = p.L_fixed
     else:
         ok = live & (nd_prev > 0.0)
-        L = p.smoothing_B * ok.sum() / nd_prev[ok].sum()
+        w = (V / V0)[ok] if p.smoothing_volume else np.ones(ok.sum())
+        L = p.smoothing_B * w.sum() / (w * nd_prev[ok]).sum()
     wf = np.ones_like(x)
     k1 = None
     if strain:

@@ -161,3 +161,35 @@ def test_step_vs_naive_without_jit():
                           os.path.join(here, "test_step_vs_naive.py")], env=env, capture_output=True, text=True,
                          timeout=600)
     assert out.returncode == 0, out.stdout[-2000:] + out.stderr[-2000:]
+
+
+def test_volume_weighted_smoothing_length_matches_naive_and_ignores_emptied_particles():
+    """numerics.smoothing_weight: volume: eq 25's mean weighted by V/V0, against the NumPy twin; and a
+    cluster of nearly emptied particles (n_i 50 times the rest) moves the count mean, not the weighted one."""
+    rng = np.random.default_rng(11)
+    cfg, p, tab = _constant_case(True)
+    p = p._replace(smoothing_volume=True, k_symmetric=False, k_strain=0.0)
+    x, u, V, V0, nd = _state(rng, dead=(5,))
+    V0 = V0 * (1.0 + rng.uniform(0.0, 3.0, N))           # unequal fractions V/V0
+    ng = 240
+    dep = np.zeros(ng)
+    binv = np.ones(ng)
+    xk, F, depk, _, dt, L = _kernel_step(x, u, V, V0, nd, dep, dep, binv, p, tab)
+    xn, un, Vn, depn, _, h, dt_n, L_n, fr, *kn = nv.step(x, u, V, V0, nd, dep, dep, binv, p, tab)
+    assert L == pytest.approx(L_n, rel=1e-14)
+    _compare(F[F_U], un, "velocity")
+    from granudep.da.step import smoothing_length
+    G = np.zeros((N_FIELDS, N))
+    G[F_V0] = 1.0
+    G[F_V] = 1.0
+    G[F_ND] = 100.0
+    G[F_V, :10] = 1e-4                                    # ten particles nearly emptied by eq 34 ...
+    G[F_ND, :10] = 5000.0                                 # ... piled into one cluster
+    count = smoothing_length(G, p._replace(smoothing_volume=False))
+    weighted = smoothing_length(G, p)
+    full = N - 10
+    clean = p.smoothing_B / 100.0                         # the full particles alone
+    assert weighted == pytest.approx(p.smoothing_B * (full + 10e-4) / (full * 100.0 + 10e-4 * 5000.0), rel=1e-14)
+    assert abs(weighted / clean - 1.0) < 2e-3
+    assert count == pytest.approx(p.smoothing_B * N / (full * 100.0 + 10 * 5000.0), rel=1e-14)
+    assert count < 0.2 * clean

@@ -99,6 +99,7 @@ def step_params(cfg, phys: Physics, dx_grid: float | None = None) -> StepParams:
     return StepParams(
         g=float(G), cfl=float(num.cfl), xsph_delta=float(num.xsph_delta), kernel_support=float(num.kernel_support),
         smoothing_B=float(num.smoothing_B), L_fixed=float(num.L_s) if num.smoothing == "fixed" else 0.0,
+        smoothing_volume=num.smoothing_weight == "volume",
         back_wall=bool(cfg.geometry.back_wall), x_min=-math.inf, x_max=float(cfg.geometry.domain_end),
         u_rest=float(num.u_rest), max_steps=int(num.max_steps),
         deposition=bool(phys.deposition), deposit_as_bed=bool(dep.deposit_as_bed),

@@ -88,6 +88,7 @@ class StepParams(NamedTuple):
     deposit_max_tan: float = math.inf  # no deposition where |tanθ| exceeds this (tan φ_B: a deposit cannot rest there)
     k_symmetric: bool = False     # earth pressure in symmetric pair form (``sph.symmetric_pressure_gradient``)
     k_strain: float = 0.0         # 1/ε_k > 0: k is a particle state following the strain (``strained_k``), pair form
+    smoothing_volume: bool = False  # eq 25's mean weighted by V/V0 (numerics.smoothing_weight: volume)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -130,15 +131,18 @@ def deposit_smoothing_length(L, dx_grid):
 @njit(cache=True)
 def smoothing_length(F, p):
     """Eq 25 generalised: L_s = B N / Σ_i n_i with n_i = Σ_j W_ij over particles with volume (for equal
-    volumes n_i = h_i/V_i, eq 25 exactly); or the fixed L_s."""
+    volumes n_i = h_i/V_i, eq 25 exactly); with ``p.smoothing_volume`` each particle weighted by the
+    fraction V/V0 of its released volume it still carries (a particle eq 34 has emptied no longer
+    resolves the flow); or the fixed L_s. Without deposition V = V0 and both are the same number."""
     if p.L_fixed > 0.0:
         return p.L_fixed
     s = 0.0
-    c = 0
+    c = 0.0
     for i in range(F.shape[1]):
         if F[F_V, i] > 0.0 and F[F_ND, i] > 0.0:
-            s += F[F_ND, i]
-            c += 1
+            w = F[F_V, i] / F[F_V0, i] if p.smoothing_volume else 1.0
+            s += w * F[F_ND, i]
+            c += w
     return p.smoothing_B * c / s
 
 
