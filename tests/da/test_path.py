@@ -238,3 +238,19 @@ def test_path_figure_cli(lab_run, tmp_path):
     assert main(["path-figure", "-o", str(out), *files]) == 0
     assert out.stat().st_size > 10_000 and out.read_bytes()[:4] == b"\x89PNG"
     assert main(["path-figure", "-o", str(out), files[0], files[1], files[0]]) == 2
+
+
+def test_path_figure_takes_runs_on_different_station_grids(lab_run, tmp_path):
+    """With deposition the grid follows the particles (solver.grid_spacing), so the two runs of a
+    figure may sit on different station grids: each is drawn on its own."""
+    from granudep.cli import main
+    dep, _ = lab_run
+    cfg = pv._lab_config(pv.curved_lab_path(tmp_path))
+    coarse = run_da({**cfg, "output": {**cfg["output"], "dx_grid": 2.0 * cfg["output"]["dx_grid"]}}, deposition=False)
+    assert coarse.s.size != dep.s.size
+    files = [str(tmp_path / "dep.nc"), str(tmp_path / "nodep.nc")]
+    write_netcdf(dep, files[0])
+    write_netcdf(coarse, files[1])
+    out = tmp_path / "path.png"
+    assert main(["path-figure", "-o", str(out), *files]) == 0
+    assert out.read_bytes()[:4] == b"\x89PNG"

@@ -42,9 +42,12 @@ def path_figure(runs, exaggeration: float | None = None):
     for ds in dss:
         st = STYLE[int(ds.attrs["deposition"])]
         hd = ds.final_deposit_depth.values
-        top_x, top_z = x + ex * hd * nx, z + ex * hd * nz
+        # each run on its own station grid (with deposition the grid follows the particles)
+        xd, zd = ds.x.values, ds.z.values
+        nxd, nzd = _normal(ds)
+        top_x, top_z = xd + ex * hd * nxd, zd + ex * hd * nzd
         if st["ls"] == "-":
-            ax.fill(np.concatenate([x, top_x[::-1]]), np.concatenate([z, top_z[::-1]]), color=st["color"], alpha=0.5,
+            ax.fill(np.concatenate([xd, top_x[::-1]]), np.concatenate([zd, top_z[::-1]]), color=st["color"], alpha=0.5,
                     lw=0, label=f"final deposit ({st['label']})")
         else:
             ax.plot(top_x, top_z, color=st["color"], ls=st["ls"], lw=1.0, label=f"final deposit ({st['label']})")
