@@ -53,10 +53,13 @@ def test_reading_runs_compares_each_reading_with_the_2d_reference_and_the_run_wi
     assert {"ab_source": "user", "A": -0.03, "B": 0.04} in dep
 
 
-def test_reading_runs_refuses_a_reference_without_every_table5_case():
-    ref = reference().iloc[:3]
-    with pytest.raises(ValueError, match="1D-A124"):
-        reading_runs(diagnosis(), ref, 100, runout=fake_runout([]))
+def test_reading_runs_takes_the_table5_cases_the_reference_has_and_refuses_none():
+    calls = []
+    df = reading_runs(diagnosis(), reference().iloc[2:3], 100, runout=fake_runout(calls))   # 1D-A70 only
+    assert set(df.case) == {"1D-A70"} and len(df) == 2
+    assert {c for c, _, _ in calls} == {"1D-A70"}
+    with pytest.raises(ValueError, match="no row for any Table 5 case"):
+        reading_runs(diagnosis(), reference().iloc[0:0], 100, runout=fake_runout([]))
 
 
 def test_pivot_shows_every_reading_and_the_no_deposition_row():

@@ -36,16 +36,16 @@ def _run_runout(case: str, n_particles: int, deposition) -> float:
 
 def reading_runs(diagnosis: pd.DataFrame, reference: pd.DataFrame, n_particles: int,
                  runout: Callable[[str, int, object], float] = _run_runout) -> pd.DataFrame:
-    """One DA run with deposition per (reading, Table 5 geometry) of ``diagnosis`` that has finite
-    A, B, and one without deposition per geometry. ``runout(case, n, deposition)`` returns the
+    """One DA run with deposition per (reading, Table 5 geometry of the reference) of ``diagnosis``
+    that has finite A, B, and one without deposition per geometry. ``runout(case, n, deposition)`` returns the
     final ΔL/L0 (``deposition``: False, or the deposition section with A, B)."""
     ref = reference.set_index("case")
-    missing = [c for c in DA_CASES if c not in ref.index]
-    if missing:
-        raise ValueError(f"reference: no row for {', '.join(missing)} (needs every Table 5 case)")
+    present = [c for c in DA_CASES if c in ref.index]
+    if not present:
+        raise ValueError(f"reference: no row for any Table 5 case ({', '.join(DA_CASES)})")
     to_da = {two_d_case(r): c for c, r in zip(ref.index, ref.itertuples()) if c in DA_CASES}
     rows = []
-    nodep = {c: runout(c, n_particles, False) for c in DA_CASES}
+    nodep = {c: runout(c, n_particles, False) for c in present}
     for r in diagnosis.itertuples():
         case = to_da.get(r.case)
         if case is None or not (math.isfinite(r.A) and math.isfinite(r.B)):
