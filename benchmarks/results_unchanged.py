@@ -1,10 +1,12 @@
 """Are the outputs of this checkout bit for bit those of another revision? (structure and
 numerics go in separate commits, the ISPH and DA outputs unchanged by each structural step)
 
-    python benchmarks/results_unchanged.py [--base main] [--dx 0.008] [--keep DIR] [--threads 1]
+    python benchmarks/results_unchanged.py [--base main] [--dx 0.008] [--keep DIR] [--threads 1] [--da-only]
 
-Runs T22-A70 (2D ISPH at --dx, to rest) and 1D-A70 (DA, with and without deposition) twice, with
-this working tree and with --base's src/ (``git archive`` into a temporary folder), each in its own
+Runs T22-A70 (2D ISPH at --dx, to rest; not with --da-only), 1D-A70 (DA, with and without
+deposition, N = 1000; with deposition also at N = 4000, where the deposit grid follows the release
+smoothing length) and the example path (config/da/example_path.yaml at N = 1000, x∞ fixed, with and
+without deposition) twice, with this working tree and with --base's src/ (``git archive`` into a temporary folder), each in its own
 process on one numba thread (``--threads``) with its own numba cache, and compares every data variable and
 coordinate value for value (NaN equal to NaN). Prints the differing arrays and exits 1 when any
 differs, 0 when all agree. Both runs are made on this machine: OpenBLAS's kernels (np.dot in the
@@ -27,24 +29,36 @@ RUNNER = """
 import sys
 import numpy as np
 import granudep
-dx, out = float(sys.argv[1]), sys.argv[2]
+dx, out, path_yaml, da_only = float(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4] == "1"
 arrays = {}
-for dep in (True, False):
-    ds = granudep.run_da("1D-A70", deposition=dep, progress=False)
+
+
+def keep(name, ds):
     for k, v in {**ds.coords, **ds.data_vars}.items():
-        arrays[f"1D-A70_{'deposition' if dep else 'nodeposition'}/{k}"] = np.asarray(v.values)
-ds = granudep.run_isph("T22-A70", dx=dx, progress=False)
-for k, v in {**ds.coords, **ds.data_vars}.items():
-    arrays[f"T22-A70/{k}"] = np.asarray(v.values)
+        arrays[f"{name}/{k}"] = np.asarray(v.values)
+
+
+for dep in (True, False):
+    keep(f"1D-A70_{'deposition' if dep else 'nodeposition'}", granudep.run_da("1D-A70", deposition=dep, progress=False))
+    keep(f"path_{'deposition' if dep else 'nodeposition'}", granudep.run_da(
+        path_yaml, deposition={"x_inf_mode": "user", "x_inf": 730.0} if dep else False, progress=False,
+        numerics={"n_particles": 1000}))
+keep("1D-A70_deposition_N4000", granudep.run_da("1D-A70", deposition=True, progress=False, n_particles=4000))
+status = "no 2D run"
+if not da_only:
+    ds = granudep.run_isph("T22-A70", dx=dx, progress=False)
+    keep("T22-A70", ds)
+    status = ds.attrs["status"]
 np.savez(out, **arrays)
-print(granudep.__file__, len(arrays), "arrays;", "T22-A70", ds.attrs["status"])
+print(granudep.__file__, len(arrays), "arrays;", "T22-A70", status)
 """
 
 
-def _run(src: Path, dx: float, out: Path, cache: Path, threads: int = 1) -> None:
+def _run(src: Path, dx: float, out: Path, cache: Path, threads: int = 1, da_only: bool = False) -> None:
     env = {**os.environ, "PYTHONPATH": str(src), "NUMBA_NUM_THREADS": str(threads), "NUMBA_CACHE_DIR": str(cache),
            "PYTHONDONTWRITEBYTECODE": "1"}
-    subprocess.run([sys.executable, "-c", RUNNER, str(dx), str(out)], env=env, check=True, cwd=src.parent)
+    subprocess.run([sys.executable, "-c", RUNNER, str(dx), str(out), str(ROOT / "config" / "da" / "example_path.yaml"),
+                    "1" if da_only else "0"], env=env, check=True, cwd=src.parent)
 
 
 def _differences(a: Path, b: Path) -> list[str]:
@@ -66,6 +80,7 @@ def main() -> int:
     ap.add_argument("--keep", metavar="DIR", help="keep the two .npz files in DIR")
     ap.add_argument("--threads", type=int, default=1,
                     help="NUMBA_NUM_THREADS of both runs (default 1; 2 exercises the parallel builds)")
+    ap.add_argument("--da-only", action="store_true", help="the DA runs only (no T22-A70)")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="granudep-unchanged-") as tmp:
         tmp = Path(tmp)
@@ -77,14 +92,15 @@ def main() -> int:
         keep = Path(args.keep) if args.keep else tmp
         keep.mkdir(parents=True, exist_ok=True)
         files = {"base": keep / "base.npz", "tree": keep / "tree.npz"}
-        _run(base / "src", args.dx, files["base"], tmp / "cache_base", args.threads)
-        _run(ROOT / "src", args.dx, files["tree"], tmp / "cache_tree", args.threads)
+        _run(base / "src", args.dx, files["base"], tmp / "cache_base", args.threads, args.da_only)
+        _run(ROOT / "src", args.dx, files["tree"], tmp / "cache_tree", args.threads, args.da_only)
         diff = _differences(files["base"], files["tree"])
     if diff:
         print(f"outputs differ from {args.base}:\n  " + "\n  ".join(diff))
         return 1
-    print(f"every array of T22-A70 (dx = {args.dx} m) and 1D-A70 (with and without deposition) is identical "
-          f"to {args.base}'s")
+    what = "" if args.da_only else f"T22-A70 (dx = {args.dx} m), "
+    print(f"every array of {what}1D-A70 (with and without deposition, and N = 4000 with) and the example path "
+          f"(with and without) is identical to {args.base}'s")
     return 0
 
 

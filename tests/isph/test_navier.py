@@ -61,7 +61,7 @@ def test_navier_film_matches_the_analytic_slip_profile_at_2_mm():
 def test_navier_film_and_bagnold_at_both_resolutions():
     rows = v.navier_film(quick=False) + v.navier_bagnold(quick=False)
     _assert_rows(rows)
-    assert sum(math.isfinite(r["tolerance"]) for r in rows) == 6  # 4 film rows + 2 Bagnold rows at 1 mm
+    assert sum(math.isfinite(r["tolerance"]) for r in rows) == 8  # 4 film rows + 4 Bagnold rows at 1 and 0.5 mm
 
 
 def _overwrite_reference(x, y, grad, wx, wy, wnx, wny, nf, band, ls, u, v):

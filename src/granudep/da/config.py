@@ -54,9 +54,10 @@ class Numerics:
     smoothing: Literal["eq25", "fixed"] = param("eq25", doc="eq 25 variable L_s, or a fixed L_s")
     smoothing_B: float = param(10.0, gt=0.0, le=500.0, doc="B of eq 25 (L_s = B x mean spacing; paper: 50)")
     smoothing_weight: Literal["count", "volume"] = param(
-        "count", doc="eq 25's mean number density over the particles (count), or weighted by the fraction of its "
-                     "released volume each still carries (volume: particles emptied by eq 34 stop setting L_s); "
-                     "the same without deposition")
+        "volume", doc="eq 25's mean number density weighted by the fraction of its released volume each "
+                      "particle still carries (volume, default: particles emptied by eq 34 stop setting L_s, so "
+                      "their clusters cannot shrink it; the deposition ladders converge in N with it), or over "
+                      "the particles (count); the two are identical without deposition")
     L_s: float | None = param(None, gt=0.0, unit="m", doc="fixed smoothing length (smoothing: fixed)")
     kernel_support: float = param(3.0, ge=2.0, le=6.0, doc="Gaussian cut-off in units of L_s (paper: 2)")
     cfl: float = param(0.5, gt=0.0, le=1.0, doc="CFL number of eq 32 (paper: 0 < CFL <= 1, value not given)")

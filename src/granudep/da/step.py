@@ -88,7 +88,7 @@ class StepParams(NamedTuple):
     deposit_max_tan: float = math.inf  # no deposition where |tanθ| exceeds this (tan φ_B: a deposit cannot rest there)
     k_symmetric: bool = False     # earth pressure in symmetric pair form (``sph.symmetric_pressure_gradient``)
     k_strain: float = 0.0         # 1/ε_k > 0: k is a particle state following the strain (``strained_k``), pair form
-    smoothing_volume: bool = False  # eq 25's mean weighted by V/V0 (numerics.smoothing_weight: volume)
+    smoothing_volume: bool = True  # eq 25's mean weighted by V/V0 (numerics.smoothing_weight: volume)
 
 
 # ----------------------------------------------------------------------------------------------
