@@ -1,7 +1,7 @@
 """The recorded deposit depth is a kernel estimate: no gaps between sparse tip particles, volume kept."""
 import numpy as np
 
-from granudep.da.solver import smooth_deposit
+from granudep.da.driver import smooth_deposit
 
 
 def test_sparse_deposit_has_no_gaps_and_conserves_volume():

@@ -10,7 +10,6 @@ deposit-as-bed term pushed a particle with the gradient of the deposit it laid i
 ``include`` (the behaviour before) still shows the defect, so the test below can tell them apart.
 """
 import numpy as np
-import pytest
 
 from granudep.da.config import resolve
 from granudep.da.solver import Physics, simulate

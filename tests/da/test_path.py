@@ -117,7 +117,8 @@ def test_convex_break_clips_the_normal_stress_and_counts(tmp_path):
     from granudep.config import build
     from granudep.da.config import DAConfig
     from granudep.da.path_run import path_setup
-    from granudep.da.path_solver import D_LIFT, bed_table, simulate_path
+    from granudep.da.path_solver import bed_table, simulate_path
+    from granudep.da.step import D_LIFT
     from granudep.da.solver import Physics
     x = np.array([0.0, 20.0, 30.0, 60.0])
     z = np.array([20 * math.tan(math.radians(10)), 0.0, -10.0, -40.0])

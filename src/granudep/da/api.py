@@ -1,19 +1,18 @@
 """Python API of the DA model: ``run_da`` (→ xarray.Dataset) and ``warmup``."""
 from __future__ import annotations
 
-import math
-
 import xarray as xr
 
 from ..checkpoint import identity as checkpoint_identity
 from ..progress import LOG, make_progress
 from .checkpoint import Checkpointer, DAInterrupted
 from .config import DAConfig, resolve
-from .deposition import XInfResult, coefficients, self_consistent
+from .deposition import coefficients, find_x_inf
 from .errors import DARunError
 from .output import to_dataset
 from .physics import earth_pressure_coefficients
-from .solver import AT_REST, RUNNING, Physics
+from .solver import Physics
+from .step import AT_REST, RUNNING
 from .solver import simulate as _simulate
 
 
@@ -97,22 +96,13 @@ def _run(cfg, deposition, ka, kp, label, progress, simulate) -> xr.Dataset:
         _check(rec, cfg, lambda r: to_dataset(cfg, r, deposition=True, physics=phys, A=A, B=B, ab_source=source))
         return rec
 
-    if dep.x_inf_mode == "user":
-        xinf = XInfResult(dep.x_inf, run_with(dep.x_inf), "user")
-    else:
+    def run_without():
         phys0 = Physics(ka, kp, False)
         rec0 = simulate(cfg, phys0, f"{cfg.case} (no deposition, for x_inf)", progress)
         _check(rec0, cfg, lambda r: to_dataset(cfg, r, deposition=False, physics=phys0))
-        x_nd = rec0.final_front
-        if not math.isfinite(x_nd) or x_nd <= cfg.geometry.L0:
-            raise DARunError(f"DA {cfg.case}: the no-deposition front ({x_nd}) does not pass the gate; x_inf undefined")
-        if dep.x_inf_mode == "no-deposition":
-            xinf = XInfResult(x_nd, run_with(x_nd), "no-deposition")
-        else:
-            xinf = self_consistent(run_with, x_nd, cfg.geometry.L0, dep.x_inf_tol, dep.x_inf_residual_tol,
-                                   dep.x_inf_max_iter)
-            LOG.info("DA %s: x_inf = %.5f m after %d runs, residual %.2e", cfg.case, xinf.x_inf,
-                     xinf.iterations, xinf.residual)
+        return rec0
+
+    xinf = find_x_inf(dep, run_with, run_without, cfg.geometry.L0, cfg.case)
     phys = Physics(ka, kp, True, A, B, xinf.x_inf)
     return to_dataset(cfg, xinf.record, deposition=True, physics=phys, A=A, B=B, ab_source=source, xinf=xinf)
 

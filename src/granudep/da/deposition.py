@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from ..cases import table5
 from ..config import ConfigError
 from ..progress import LOG
+from .errors import DARunError
 
 
 def coefficients(cfg) -> tuple[float, float, str]:
@@ -130,3 +131,25 @@ def self_consistent(run, x_nodep: float, L0: float, tol: float, residual_tol: fl
                     f"change of F(x) - x (residual {residual:.3g}, {len(hx)} runs)")
         LOG.warning("%s", warning)
     return XInfResult(best, cache[best], "self-consistent", len(hx), residual, hx, hf, warning)
+
+
+def find_x_inf(dep, run_with, run_without, gate: float, case: str, origin: float = 0.0) -> XInfResult:
+    """x∞ by ``deposition.x_inf_mode``, for a column and a path alike (coordinates from the back wall;
+    ``origin``: the station of coordinate 0 on a path, where the user's x∞ is a station).
+
+    ``run_with(x)``: the deposition run with x∞ = x (its record); ``run_without()``: the run without
+    deposition. ``user``: the user's x∞; ``no-deposition``: the final front without deposition;
+    ``self-consistent``: :func:`self_consistent` from there. ``gate``: the release end."""
+    if dep.x_inf_mode == "user":
+        x = dep.x_inf - origin
+        return XInfResult(x, run_with(x), "user")
+    x_nd = run_without().final_front
+    if not math.isfinite(x_nd) or x_nd <= gate:
+        raise DARunError(f"DA {case}: the no-deposition front ({x_nd + origin}) does not pass the release end; "
+                         f"x_inf undefined")
+    if dep.x_inf_mode == "no-deposition":
+        return XInfResult(x_nd, run_with(x_nd), "no-deposition")
+    xinf = self_consistent(run_with, x_nd, gate, dep.x_inf_tol, dep.x_inf_residual_tol, dep.x_inf_max_iter)
+    LOG.info("DA %s: x_inf = %.5f m after %d runs, residual %.2e", case, xinf.x_inf + origin, xinf.iterations,
+             xinf.residual)
+    return xinf

@@ -20,10 +20,13 @@ from ..config import ConfigError, to_yaml
 from ..front import flow_time
 from ..io import provenance, var
 from ..progress import LOG, Progress
+from .deposition import find_x_inf
 from .errors import DARunError
+from .output import add_x_inf_history, run_attributes, run_variables
 from .path import Bed, bed_of
 from .physics import earth_pressure_coefficients
-from .path_solver import AT_REST, RUNNING, E_H, E_T, E_U, D_DEFICIT, D_LIFT, D_WHERE, PathSetup, bed_table, simulate_path
+from .path_solver import PathSetup, bed_table, simulate_path
+from .step import AT_REST, D_DEFICIT, D_LIFT, D_WHERE, E_H, E_T, E_U, RUNNING
 from .solver import Physics
 
 FRONT_DEFINITION = ("down-slope edge of the farthest down-slope contiguous run of grid cells whose total depth "
@@ -141,7 +144,6 @@ class _Runner:
 
 def run_path(cfg, deposition: bool = True, bed: Bed | None = None) -> xr.Dataset:
     """The path counterpart of ``api.run_da`` (called by it when ``geometry.path`` is set)."""
-    from .deposition import XInfResult, self_consistent
     setup = path_setup(cfg, bed)
     runner = _Runner(cfg, setup, Progress(cfg.output.progress_every_s))
     label = f"{cfg.case} ({'deposition' if deposition else 'no deposition'})"
@@ -171,21 +173,12 @@ def run_path(cfg, deposition: bool = True, bed: Bed | None = None) -> xr.Dataset
         check(rec, lambda r: to_path_dataset(cfg, setup, r, deposition=True, ab_source=source))
         return rec
 
-    if dep.x_inf_mode == "user":
-        xinf = XInfResult(dep.x_inf - setup.origin, run_with(dep.x_inf - setup.origin), "user")
-    else:
+    def run_without():
         rec0, _ = runner.run(False, label=f"{cfg.case} (no deposition, for x_inf)")
         check(rec0, lambda r: to_path_dataset(cfg, setup, r, deposition=False))
-        x_nd = rec0.final_front
-        if not math.isfinite(x_nd) or x_nd <= setup.xi_gate:
-            raise DARunError(f"DA {cfg.case}: the no-deposition front does not pass the release end; x_inf undefined")
-        if dep.x_inf_mode == "no-deposition":
-            xinf = XInfResult(x_nd, run_with(x_nd), "no-deposition")
-        else:
-            xinf = self_consistent(run_with, x_nd, setup.xi_gate, dep.x_inf_tol, dep.x_inf_residual_tol,
-                                   dep.x_inf_max_iter)
-            LOG.info("DA %s: x_inf = s %.5f m after %d runs, residual %.2e", cfg.case, xinf.x_inf + setup.origin,
-                     xinf.iterations, xinf.residual)
+        return rec0
+
+    xinf = find_x_inf(dep, run_with, run_without, setup.xi_gate, cfg.case, setup.origin)
     return to_path_dataset(cfg, setup, xinf.record, deposition=True, ab_source=source, xinf=xinf)
 
 
@@ -202,7 +195,7 @@ def runout_measures(bed: Bed, s_top: float, s_gate: float, s_front: float) -> di
 def to_path_dataset(cfg, setup: PathSetup, rec, *, deposition: bool, ab_source: str = "", xinf=None) -> xr.Dataset:
     """The CF dataset of one path run: the DA contract's time series, fields on the station grid
     s (with x, z), particle states, and the along-path envelopes and runout measures."""
-    bed, g = setup.bed, cfg.geometry
+    bed = setup.bed
     o = setup.origin
     time = np.asarray(rec.time, dtype=float)
     front_s = np.asarray(rec.front, dtype=float) + o
@@ -213,19 +206,17 @@ def to_path_dataset(cfg, setup: PathSetup, rec, *, deposition: bool, ab_source: 
     s_grid = (np.arange(ng) + 0.5) * dxg + o
     vol_flow = np.asarray([np.sum(v) for v in rec.volume])
     vol_dep = np.asarray(rec.deposited_volume, dtype=float)
-    v0 = vol_flow[0]
     t_c = characteristic_time(setup.H0, setup.theta_release)
-    tol = cfg.output.flow_time_tolerance
-    t_f = flow_time(time, front_s, tol) if rec.status == AT_REST else float("nan")
+    t_f = flow_time(time, front_s, cfg.output.flow_time_tolerance) if rec.status == AT_REST else float("nan")
     final_s = float(front_s[-1]) if front_s.size else float("nan")
     meas = runout_measures(bed, setup.s_start, setup.s_end, final_s)
     env = rec.envelopes
     arrival = np.where(np.isfinite(env[E_T]), env[E_T], np.nan)
     final_total = flow[-1] + depo[-1]
     if xinf is not None:
-        x_inf, mode, iters, resid = xinf.x_inf + o, xinf.mode, xinf.iterations, xinf.residual
+        x_inf, mode = xinf.x_inf + o, xinf.mode
     else:
-        x_inf, mode, iters, resid = final_s, "final front of this run (no deposition)", 0, 0.0
+        x_inf, mode = final_s, "final front of this run (no deposition)"
     vunit = "m3" if bed.has_width else "m2"
     vname = "" if bed.has_width else " per unit width"
     xs, zs = bed.at("x", s_grid), bed.at("z", s_grid)
@@ -234,8 +225,6 @@ def to_path_dataset(cfg, setup: PathSetup, rec, *, deposition: bool, ab_source: 
             "front_position": var(front_s, ("time",), "m", "front station along the bed from the first path point",
                                   definition=FRONT_DEFINITION),
             "runout": var(front_s - setup.s_end, ("time",), "m", "runout along the bed from the release end"),
-            "flowing_volume": var(vol_flow, ("time",), vunit, f"flowing volume{vname}"),
-            "deposited_volume": var(vol_dep, ("time",), vunit, f"deposited volume{vname}"),
             "flow_depth": var(flow, ("time", "s"), "m", "flowing depth h (bed-normal, eq 20 / width)",
                               coordinates="x z"),
             "deposit_depth": var(depo, ("time", "s"), "m", "deposited depth h_D (bed-normal)", coordinates="x z"),
@@ -255,12 +244,6 @@ def to_path_dataset(cfg, setup: PathSetup, rec, *, deposition: bool, ab_source: 
             "width": var(bed.at("width", s_grid), ("s",), "m", "channel width b(s) (1 m: per unit width)",
                          coordinates="x z"),
             "x_particle": var(np.asarray(rec.x) + o, ("time", "particle"), "m", "particle station along the bed"),
-            "u": var(np.asarray(rec.u), ("time", "particle"), "m s-1", "particle depth-averaged velocity along the bed"),
-            "h": var(np.asarray(rec.h), ("time", "particle"), "m", "flowing depth at the particle"),
-            "volume": var(np.asarray(rec.volume), ("time", "particle"), vunit, f"particle volume{vname}"),
-            "smoothing_length": var(np.asarray(rec.smoothing_length), ("time",), "m", "smoothing length L_s (eq 25)"),
-            "time_step": var(np.asarray(rec.time_step), ("time",), "s", "last time step before the output (eq 32)"),
-            "steps": var(np.asarray(rec.steps, dtype=np.int64), ("time",), "1", "time steps taken"),
             "final_runout": var(meas["runout_along_bed"], (), "m", "final runout along the bed from the release end"),
             "final_runout_norm": var(meas["runout_along_bed"] / setup.L0, (), "1", "final runout along the bed / L0"),
             "runout_horizontal": var(meas["runout_horizontal"], (), "m",
@@ -269,10 +252,7 @@ def to_path_dataset(cfg, setup: PathSetup, rec, *, deposition: bool, ab_source: 
                                 "travel (reach) angle atan(H/L), release top to the final front"),
             "drop_height": var(meas["drop"], (), "m", "H: elevation drop from the release top to the final front"),
             "reach_length": var(meas["reach"], (), "m", "L: horizontal distance from the release top to the front"),
-            "flow_time": var(t_f, (), "s", "time when the front comes to rest (granudep.front.flow_time)"),
-            "flow_time_norm": var(t_f / t_c, (), "1", "flow time / t_c, t_c = sqrt(H0/(g cos theta_release))"),
-            "volume_error": var(float(np.max(np.abs(vol_flow + vol_dep - v0)) / v0), (), "1",
-                                "max |flowing + deposited - initial| / initial volume"),
+            **run_variables(rec, vol_flow, vol_dep, t_f, t_c, vunit, vname, " along the bed"),
         },
         coords={
             "time": var(time, ("time",), "s", "time since release"),
@@ -283,28 +263,18 @@ def to_path_dataset(cfg, setup: PathSetup, rec, *, deposition: bool, ab_source: 
             "z": var(zs, ("s",), "m", "bed elevation at the station", positive="up"),
         },
     )
-    if mode == "self-consistent":
-        ds["x_inf_history"] = var(np.asarray(xinf.history_x) + o, ("x_inf_iteration",), "m", "x_inf (station) tried")
-        ds["x_front_history"] = var(np.asarray(xinf.history_front) + o, ("x_inf_iteration",), "m",
-                                    "final front station of the run with that x_inf")
-        ds = ds.assign_coords(x_inf_iteration=var(np.arange(len(xinf.history_x)), ("x_inf_iteration",), "1",
-                                                  "x_inf iteration"))
-    num, pc = cfg.numerics, cfg.geometry.path
+    ds = add_x_inf_history(ds, xinf, mode, o, "x_inf (station)")
+    pc = cfg.geometry.path
     ds.attrs.update({
         "path_file": pc.file, "path_smoothing_length": bed.sigma, "path_ds": bed.ds, "path_length": bed.length,
         "has_width": int(bed.has_width), "centripetal": int(pc.centripetal), "ab_slope": pc.ab_slope,
         "release_start": setup.s_start, "release_end": setup.s_end, "origin": o,
         "theta_deg": math.degrees(setup.theta_release), "L0": setup.L0, "H0": setup.H0, "a": setup.H0 / setup.L0,
-        "deposition": int(deposition), "front_depth_threshold": cfg.front_threshold, "flow_time_tolerance": tol,
         "front_definition": FRONT_DEFINITION, "arrival_definition": ARRIVAL_DEFINITION,
-        "x_inf": float(x_inf), "x_inf_mode": mode, "x_inf_iterations": int(iters), "x_inf_residual": float(resid),
         "A": float(np.mean(rec.A)) if deposition else float("nan"), "B": float(np.mean(rec.B)) if deposition else
-        float("nan"), "ab_source": ab_source, "coefficient_units": cfg.deposition.coefficient_units,
-        "p0": momentum_scale(setup.H0, setup.theta_release), "t_c": t_c, "earth_pressure": num.earth_pressure, "earth_pressure_switch": num.earth_pressure_switch,
-        "phi_internal_deg": cfg.material.phi_internal_deg, "phi_basal_deg": cfg.material.phi_basal_deg,
-        "d": cfg.material.d, "n_particles": num.n_particles, "smoothing_B": num.smoothing_B, "cfl": num.cfl,
-        "xsph_delta": num.xsph_delta, "kernel_support": num.kernel_support, "dx_grid": dxg,
-        "n_steps": int(rec.n_steps), "at_rest": int(rec.status == AT_REST), "status": rec.message,
+        float("nan"), "p0": momentum_scale(setup.H0, setup.theta_release),
+        **run_attributes(cfg, rec, deposition=deposition, dxg=dxg, x_inf=x_inf, xinf=xinf, mode=mode,
+                         ab_source=ab_source, t_c=t_c),
         "lift_off_count": int(rec.diag[D_LIFT]), "lift_off_max_deficit_g": float(rec.diag[D_DEFICIT]),
         "lift_off_station": float(rec.diag[D_WHERE]) if rec.diag[D_LIFT] else float("nan"),
         "lift_off_note": "particle-stages where g cos(theta) + kappa u^2 < 0 (convex break): the normal stress and "

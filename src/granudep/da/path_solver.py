@@ -1,4 +1,5 @@
-"""DA SPH along a path profile: the driver of ``step.advance`` on a bed table.
+"""DA SPH along a path profile: the path's run constants, bed table, grid and release; the time
+loop is ``driver.run``, shared with the constant-slope model.
 
 The particles move along the bed; their coordinate ξ = s − s_origin is the station along the
 smoothed path (``da/path.py``) from the back wall (s_origin = start of the release) or, without a
@@ -37,16 +38,15 @@ the corrector's ½ Δt tanφ_B (N⁺₁ + N⁺₂); for a constant N this is the
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..front import MAIN_RUN_FRACTION, main_run_front
+from .driver import DARecord, Track, run
 from .path import N_TABLE, T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
-from .solver import (AT_REST, ESCAPED, F_K, F_ND, F_U, F_V, F_V0, MAX_STEPS, N_FIELDS, NONFINITE, RUNNING,  # noqa: F401
-                     grid_depth, grid_spacing, particle_depths, smooth_deposit, smoothing_length, step_params)
-from .step import (D_DEFICIT, D_LIFT, D_WHERE, E_H, E_T, E_U, advance, deposit_smoothing_length,  # noqa: F401
-                   mark_envelopes, own_trail)
+from .solver import custom_state, grid_spacing, step_params
+from .sph import F_K, F_ND, F_V, F_V0, N_FIELDS
 
 # time_step 'relative': |u| Δt <= CFL · GEOMETRY_STEP · σ (σ the path's smoothing length)
 GEOMETRY_STEP = 0.25
@@ -79,37 +79,6 @@ class PathSetup:
         return self.bed.length - self.origin
 
 
-@dataclass
-class PathRecord:
-    """What a path run produced, at the output times (particle arrays indexed by particle id)."""
-    time: list = field(default_factory=list)
-    x: list = field(default_factory=list)
-    u: list = field(default_factory=list)
-    h: list = field(default_factory=list)
-    volume: list = field(default_factory=list)
-    flow_depth: list = field(default_factory=list)
-    deposit_depth: list = field(default_factory=list)
-    deposited_volume: list = field(default_factory=list)
-    front: list = field(default_factory=list)
-    smoothing_length: list = field(default_factory=list)
-    time_step: list = field(default_factory=list)
-    steps: list = field(default_factory=list)
-    x_edges: np.ndarray | None = None
-    envelopes: np.ndarray | None = None
-    diag: np.ndarray | None = None
-    status: int = RUNNING
-    message: str = ""
-    n_steps: int = 0
-    x_inf: float = float("nan")
-    A: float = float("nan")
-    B: float = float("nan")
-    final_deposit_volume: np.ndarray | None = None
-
-    @property
-    def final_front(self) -> float:
-        return float(self.front[-1]) if self.front else float("nan")
-
-
 def bed_table(setup: PathSetup, k_active, k_passive, A, B) -> np.ndarray:
     """The (N_TABLE, ns) table the kernel interpolates; k, A, B scalars or arrays over the stations."""
     bed = setup.bed
@@ -127,12 +96,16 @@ def bed_table(setup: PathSetup, k_active, k_passive, A, B) -> np.ndarray:
     return tab
 
 
-def _grid(setup: PathSetup, dxg: float):
+def path_track(setup: PathSetup, dxg: float) -> Track:
+    """The grid of a path run: cells of ``dxg`` in ξ from the origin to the end of the path, the
+    channel width at their centres and at the particles; places named by their station s."""
     ng = int(math.ceil(setup.xi_end / dxg))
-    edges = np.arange(ng + 1) * dxg
     centres = (np.arange(ng) + 0.5) * dxg
-    width = setup.bed.at("width", centres + setup.origin)
-    return ng, edges, centres, width
+    bed, o = setup.bed, setup.origin
+    return Track(dx_grid=dxg, n_cells=ng, width_cells=bed.at("width", centres + o),
+                 width_at=lambda x: bed.at("width", x + o), origin=float(o), coordinate="s", name="DA path",
+                 escaped=f"a particle left the path (s outside [{o:.4g}, {bed.length:.4g}] m; extend the path CSV)",
+                 envelopes=True)
 
 
 def path_params(cfg, setup: PathSetup, phys, centripetal: bool):
@@ -155,27 +128,6 @@ def path_front(edges, depth, thr, width, fraction: float = MAIN_RUN_FRACTION) ->
     return main_run_front(edges, depth, thr, width, fraction)
 
 
-def _record(rec, cfg, setup, x, F, order, dep, t, L, dt, steps, dxg, ng, width_c, thr):
-    n = x.shape[0]
-    qc = cfg.numerics.kernel_support
-    wall = cfg.geometry.back_wall
-    h = particle_depths(x, F[F_V], L, qc, wall) / setup.bed.at("width", x + setup.origin)
-    for name, vals in (("x", x), ("u", F[F_U]), ("h", h), ("volume", F[F_V])):
-        arr = np.empty(n)
-        arr[order] = vals
-        getattr(rec, name).append(arr)
-    flow = grid_depth(x, F[F_V], L, qc, wall, dxg, ng) / width_c
-    depo = smooth_deposit(dep, deposit_smoothing_length(L, dxg), qc, dxg) / width_c
-    rec.flow_depth.append(flow)
-    rec.deposit_depth.append(depo)
-    rec.deposited_volume.append(float(np.sum(dep)))
-    rec.front.append(path_front(rec.x_edges, flow + depo, thr, width_c))
-    rec.time.append(t)
-    rec.smoothing_length.append(L)
-    rec.time_step.append(dt)
-    rec.steps.append(steps)
-
-
 def initial_path_state(setup: PathSetup):
     n = setup.x0.size
     x = setup.x0.copy()
@@ -188,63 +140,11 @@ def initial_path_state(setup: PathSetup):
 
 
 def simulate_path(cfg, setup: PathSetup, phys, tab: np.ndarray, label: str = "", progress=None, init=None,
-                  centripetal: bool | None = None) -> PathRecord:
-    """Run one DA simulation along the path to rest (or t_end); a failure stops the run and the
-    record keeps what was written, with ``status`` and ``message`` (time, step, particle, station)."""
-    from .solver import custom_state
+                  centripetal: bool | None = None) -> DARecord:
+    """Run one DA simulation along the path to rest (or t_end) (``driver.run``: a failure stops the
+    run, the record keeps what was written, with ``status`` and ``message``: time, step, particle,
+    station). ``init``: any initial particle set (ξ, volume, u) instead of the release."""
     cent = cfg.geometry.path.centripetal if centripetal is None else centripetal
-    if init is None:
-        x, F, order = initial_path_state(setup)
-    else:
-        x, F, order = custom_state(*init)
     prm = path_params(cfg, setup, phys, cent)
-    dxg = prm.dx_grid
-    ng, edges, centres, width_c = _grid(setup, dxg)
-    dep = np.zeros(ng)
-    depb = np.zeros(ng)
-    binv = 1.0 / width_c
-    env = np.zeros((3, ng))
-    env[E_T] = np.inf
-    diag = np.zeros(3)
-    own = own_trail(x.shape[0], prm.deposition and prm.deposit_as_bed and not prm.own_deposit)
-    rec = PathRecord(x_edges=edges, x_inf=phys.x_inf, A=phys.A, B=phys.B, envelopes=env, diag=diag)
-    thr = cfg.front_threshold
-    L = smoothing_length(F, prm)
-    # the release itself: depth and arrival time 0 in its cells
-    h0 = particle_depths(x, F[F_V], L, cfg.numerics.kernel_support, cfg.geometry.back_wall)
-    h0 = h0 / setup.bed.at("width", x + setup.origin)
-    mark_envelopes(env, x, x, h0, F[F_U], F[F_V], 0.0, dxg, thr)
-    _record(rec, cfg, setup, x, F, order, dep, 0.0, L, 0.0, 0, dxg, ng, width_c, thr)
-    t, steps = 0.0, 0
-    dt_out, t_end = cfg.output.dt_output, cfg.numerics.t_end
-    k = 1
-    while True:
-        t_target = min(k * dt_out, t_end)
-        t, steps, status, where, L, dt = advance(x, F, order, dep, depb, binv, env, diag, t, t_target, prm, tab,
-                                                 steps, own)
-        if status in (RUNNING, AT_REST):
-            _record(rec, cfg, setup, x, F, order, dep, t, L, dt, steps, dxg, ng, width_c, thr)
-        if progress is not None:
-            progress(lambda: f"DA path {label}: t = {t:.3f} s, step {steps}, front s = "
-                             f"{rec.front[-1] + setup.origin:.3f} m, L_s = {L:.3g} m, dt = {dt:.2e} s")
-        if status == AT_REST:
-            rec.status, rec.message = AT_REST, f"at rest at t = {t:.4f} s after {steps} steps"
-            break
-        if status in (NONFINITE, ESCAPED, MAX_STEPS):
-            xs = np.empty_like(x)
-            xs[order] = x
-            where_txt = "" if where < 0 else f" particle {where} at s = {xs[where] + setup.origin:.4f} m"
-            what = {NONFINITE: "non-finite velocity or position",
-                    ESCAPED: f"a particle left the path (s outside [{setup.origin:.4g}, {setup.bed.length:.4g}] m;"
-                             f" extend the path CSV)",
-                    MAX_STEPS: f"numerics.max_steps = {cfg.numerics.max_steps} reached"}[status]
-            rec.status = status
-            rec.message = f"DA path run {label} stopped at t = {t:.5f} s, step {steps}: {what}{where_txt}"
-            break
-        if t >= t_end:
-            rec.status, rec.message = RUNNING, f"not at rest at numerics.t_end = {t_end} s"
-            break
-        k += 1
-    rec.n_steps = steps
-    rec.final_deposit_volume = dep.copy()
-    return rec
+    state = initial_path_state(setup) if init is None else custom_state(*init)
+    return run(cfg, path_track(setup, prm.dx_grid), prm, tab, state, phys, label, progress)

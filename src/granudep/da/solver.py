@@ -1,8 +1,8 @@
-"""DA SPH on a constant slope θ (Sections 2.3–2.4, Fig 4): the Python driver.
+"""DA SPH on a constant slope θ (Sections 2.3–2.4, Fig 4): the run constants, the bed table and the
+initial column of a constant-slope run; the time loop is ``driver.run``, shared with the path model.
 
-The step is ``step.advance`` (shared with the path model, ``path_solver``; the SPH sums are in
-``sph.py``, the per-particle formulas in ``physics.py``); a constant slope is a bed table of two
-equal stations. Per step:
+The step is ``step.advance`` (the SPH sums are in ``sph.py``, the per-particle formulas in
+``physics.py``); a constant slope is a bed table of two equal stations. Per step:
 
 1. sort particles by x (insertion sort), smoothing length L_s from eq 25 (generalised: B over the
    mean particle number density Σ_j W_ij, which equals eq 25 for equal volumes and stays finite as
@@ -22,46 +22,14 @@ equal stations. Per step:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from .path import N_TABLE, T_A, T_B, T_COS, T_KACT, T_KPASS, T_SIN, T_WIDTH
-from .sph import (F_H, F_K, F_ND, F_U, F_V, F_V0, N_FIELDS, deposit_gradient, evaluate, grid_depth,  # noqa: F401
-                  particle_depths)
-from .step import (AT_REST, ESCAPED, MAX_STEPS, NONFINITE, RUNNING, StepParams, advance, deposit_smoothing_length,
-                   own_trail, smoothing_length)
-
-
-# ----------------------------------------------------------------------------------------------
-# Python driver
-# ----------------------------------------------------------------------------------------------
-
-@dataclass
-class RunRecord:
-    """Everything a run produced, at the output times (arrays indexed by particle id)."""
-    time: list = field(default_factory=list)
-    x: list = field(default_factory=list)
-    u: list = field(default_factory=list)
-    h: list = field(default_factory=list)
-    volume: list = field(default_factory=list)
-    flow_depth: list = field(default_factory=list)
-    deposit_depth: list = field(default_factory=list)
-    front: list = field(default_factory=list)
-    smoothing_length: list = field(default_factory=list)
-    time_step: list = field(default_factory=list)
-    steps: list = field(default_factory=list)
-    x_edges: np.ndarray | None = None
-    status: int = RUNNING
-    message: str = ""
-    n_steps: int = 0
-    x_inf: float = float("nan")
-    A: float = float("nan")
-    B: float = float("nan")
-
-    @property
-    def final_front(self) -> float:
-        return float(self.front[-1]) if self.front else float("nan")
+from .driver import DARecord, Track, run
+from .sph import F_K, F_ND, F_U, F_V, F_V0, N_FIELDS
+from .step import StepParams
 
 
 @dataclass(frozen=True)
@@ -134,15 +102,6 @@ def constant_bed_table(theta: float, phys: Physics) -> np.ndarray:
     return tab
 
 
-def run_kernel(x, F, order, dep, t, t_target, p: StepParams, tab, nsteps, own):
-    """``step.advance`` for a constant slope (no width, no envelopes, no lift-off)."""
-    return advance(x, F, order, dep, dep, _NO_CELLS, _NO_ENVELOPES, np.zeros(3), t, t_target, p, tab, nsteps, own)
-
-
-_NO_CELLS = np.zeros(0)
-_NO_ENVELOPES = np.zeros((3, 0))
-
-
 def initial_state(cfg):
     """The column [0, L0] × [0, H0]: n equal particles at the centres of n equal cells."""
     n = cfg.numerics.n_particles
@@ -170,103 +129,17 @@ def custom_state(x, volume, u):
     return x, F, np.arange(n, dtype=np.int64)
 
 
-def _grid(cfg, dxg: float):
-    ng = int(math.ceil(cfg.geometry.domain_end / dxg))
-    return dxg, ng, np.arange(ng + 1) * dxg
+def column_track(cfg, dxg: float) -> Track:
+    """The grid of a column run: cells of ``dxg`` from the back wall x = 0 to ``geometry.x_max``."""
+    return Track(dx_grid=dxg, n_cells=int(math.ceil(cfg.geometry.domain_end / dxg)),
+                 escaped=f"a particle left the domain (x > x_max = {cfg.geometry.domain_end:.4g} m; raise geometry.x_max)")
 
 
-def smooth_deposit(dep: np.ndarray, L: float, qc: float, dxg: float) -> np.ndarray:
-    """Deposit depth h_D on the grid as an SPH estimate (eq 20 applied to deposited volume).
-
-    ``dep`` holds the deposited volume per cell, put there at the depositing particle's position.
-    Where the tip's particles are farther apart than the grid cells, that leaves empty cells
-    between them: h + h_D then dips below the front threshold and the front jumps back although
-    the material is still there (seen: 1D-A124 front 23 → 17 L0, and x∞ iterations that jump
-    across the fixed point). The flow depth is a kernel estimate with smoothing length L_s, so the
-    deposit is smoothed with the same Gaussian (cut at qc L_s, weights normalised on the grid) and
-    reflected at the back wall x = 0: the deposited volume is conserved to round-off.
-    """
-    m = max(1, int(math.ceil(qc * L / dxg)))
-    offs = np.arange(-m, m + 1) * dxg
-    w = np.exp(-(offs / L) ** 2)
-    w /= w.sum()
-    padded = np.concatenate([dep[:m][::-1], dep, np.zeros(m)])
-    return np.convolve(padded, w, mode="valid")[: dep.shape[0]] / dxg
-
-
-def _record(rec, cfg, x, F, order, dep, t, L, dt, steps, dxg, ng, thr):
-    from ..front import main_run_front
-    n = x.shape[0]
-    qc = cfg.numerics.kernel_support
-    wall = cfg.geometry.back_wall
-    h = particle_depths(x, F[F_V], L, qc, wall)
-    for name, vals in (("x", x), ("u", F[F_U]), ("h", h), ("volume", F[F_V])):
-        arr = np.empty(n)
-        arr[order] = vals
-        getattr(rec, name).append(arr)
-    flow = grid_depth(x, F[F_V], L, qc, wall, dxg, ng)
-    depo = smooth_deposit(dep, deposit_smoothing_length(L, dxg), qc, dxg)
-    rec.flow_depth.append(flow)
-    rec.deposit_depth.append(depo.copy())
-    rec.front.append(main_run_front(rec.x_edges, flow + depo, thr))
-    rec.time.append(t)
-    rec.smoothing_length.append(L)
-    rec.time_step.append(dt)
-    rec.steps.append(steps)
-
-
-def simulate(cfg, phys: Physics, label: str = "", progress=None, init=None, checkpoint=None) -> RunRecord:
-    """Run one DA simulation to rest (or t_end) and return its record.
-
-    A failure (non-finite state, particle leaving the domain, step limit) stops the run: the record
-    keeps every output written so far, with ``status`` and ``message`` saying when, at which step
-    and where. ``checkpoint`` (``da.checkpoint``): its ``resume()`` gives the state to continue
-    from (or None), and ``at_output(state_fn)`` is called after every output time.
-    """
-    dxg, ng, edges = _grid(cfg, column_grid_spacing(cfg, phys))
-    prm = step_params(cfg, phys, dxg)
-    tab = constant_bed_table(cfg.theta, phys)
-    thr = cfg.front_threshold
-    dt_out, t_end = cfg.output.dt_output, cfg.numerics.t_end
-    state = checkpoint.resume() if checkpoint is not None else None
-    if state is not None:  # continue exactly where the checkpointed run stood after output k - 1
-        x, F, order, dep, rec, t, steps, k, own = state
-    else:
-        x, F, order = initial_state(cfg) if init is None else custom_state(*init)
-        dep = np.zeros(ng)
-        own = own_trail(x.shape[0], prm.deposition and prm.deposit_as_bed and not prm.own_deposit)
-        rec = RunRecord(x_edges=edges, x_inf=phys.x_inf, A=phys.A, B=phys.B)
-        L = smoothing_length(F, prm)
-        _record(rec, cfg, x, F, order, dep, 0.0, L, 0.0, 0, dxg, ng, thr)
-        t, steps = 0.0, 0
-        k = 1
-    while True:
-        t_target = min(k * dt_out, t_end)
-        t, steps, status, where, L, dt = run_kernel(x, F, order, dep, t, t_target, prm, tab, steps, own)
-        if status in (RUNNING, AT_REST):
-            _record(rec, cfg, x, F, order, dep, t, L, dt, steps, dxg, ng, thr)
-        if progress is not None:
-            progress(lambda: f"DA {label}: t = {t:.3f} s, step {steps}, front {rec.front[-1]:.4f} m, "
-                             f"L_s = {L * 1e3:.2f} mm, dt = {dt:.2e} s")
-        if status == AT_REST:
-            rec.status, rec.message = AT_REST, f"at rest at t = {t:.4f} s after {steps} steps"
-            break
-        if status == NONFINITE or status == ESCAPED or status == MAX_STEPS:
-            xs = np.empty_like(x)
-            xs[order] = x
-            where_txt = "" if where < 0 else f" particle {where} at x = {xs[where]:.4f} m"
-            what = {NONFINITE: "non-finite velocity or position",
-                    ESCAPED: f"a particle left the domain (x > x_max = {cfg.geometry.domain_end:.4g} m;"
-                             f" raise geometry.x_max)",
-                    MAX_STEPS: f"numerics.max_steps = {cfg.numerics.max_steps} reached"}[status]
-            rec.status = status
-            rec.message = f"DA run {label} stopped at t = {t:.5f} s, step {steps}: {what}{where_txt}"
-            break
-        if t >= t_end:
-            rec.status, rec.message = RUNNING, f"not at rest at numerics.t_end = {t_end} s"
-            break
-        k += 1
-        if checkpoint is not None:
-            checkpoint.at_output(lambda: (x, F, order, dep, rec, t, steps, k, own))
-    rec.n_steps = steps
-    return rec
+def simulate(cfg, phys: Physics, label: str = "", progress=None, init=None, checkpoint=None) -> DARecord:
+    """Run one DA simulation on a constant slope to rest (or t_end) and return its record
+    (``driver.run``: a failure stops the run, the record keeps what was written). ``init``: any
+    initial particle set (x, volume, u) instead of the column; ``checkpoint``: see ``driver.run``."""
+    track = column_track(cfg, column_grid_spacing(cfg, phys))
+    prm = step_params(cfg, phys, track.dx_grid)
+    state = initial_state(cfg) if init is None else custom_state(*init)
+    return run(cfg, track, prm, constant_bed_table(cfg.theta, phys), state, phys, label, progress, checkpoint)

@@ -21,7 +21,6 @@ import pandas as pd
 from ..config import build
 from . import analytic as an
 from .config import DAConfig
-from .physics import earth_pressure_coefficients
 from .solver import Physics, simulate
 from .verification_rows import COLUMNS, row as _row
 
@@ -79,7 +78,7 @@ def check_dam_break(quick: bool = False, theta_deg: float = 0.0, delta_deg: floa
 def linear_fields(n: int = 400, spacing: float = 1e-3, L_factor: float = 4.0, q_c: float = 3.0):
     """Particles on a lattice with volumes V_j = Δx (c0 + c1 x_j) (so h = c0 + c1 x in the interior)
     and u = a + b x: returns (x, h, ∂h/∂x, ∂u/∂x, interior mask, c1, b)."""
-    from .solver import evaluate
+    from .sph import evaluate
     x = (np.arange(n) + 0.5) * spacing + 0.05
     c0, c1, a, b = 0.1, 0.5, 0.3, -2.0
     V = spacing * (c0 + c1 * x)
