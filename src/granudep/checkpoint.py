@@ -16,14 +16,13 @@ from pathlib import Path
 from typing import Any
 
 from ._version import __version__
-from .config import ConfigError
+from .config import ConfigError, to_yaml
 from .io import atomic_path
 from .progress import LOG
 
 
 def identity(cfg) -> str:
     """What a checkpoint must match to be continued: the resolved config and the version."""
-    from .config import to_yaml
     return f"granudep {__version__}\n{to_yaml(cfg)}"
 
 

@@ -17,7 +17,10 @@ from typing import Callable
 import numpy as np
 import xarray as xr
 
-from ._version import __version__
+from ._version import __version__, commit
+from .signals import deferred_signals
+from .config import ConfigError
+import time
 
 
 class ContractError(ValueError):
@@ -27,7 +30,6 @@ class ContractError(ValueError):
 def provenance(ds: xr.Dataset, *, case: str, config_yaml: str, command: str | None = None,
                title: str | None = None) -> xr.Dataset:
     """Set the global attributes the data contract requires (in place; returns ``ds``)."""
-    from ._version import commit
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     cmd = command if command is not None else " ".join(Path(sys.argv[0]).name.split() + sys.argv[1:])
     ds.attrs["Conventions"] = "CF-1.10"
@@ -123,7 +125,6 @@ def atomic_path(path: str | Path, write: Callable[[Path], None]) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     tmp = Path(tmp)
-    from .signals import deferred_signals
     try:
         with deferred_signals():  # no KeyboardInterrupt inside netCDF4/HDF5 (it hung on xarray's lock)
             write(tmp)
@@ -143,7 +144,6 @@ def check_output(path: str | Path, suffixes: tuple[str, ...] | None = (".nc",), 
     Creates the folder (as the write would) and a temporary file in it, removed at once. Raises a
     one-line ConfigError such as ``output: cannot write to results/isph (Read-only file system)``.
     """
-    from .config import ConfigError
     path = Path(path)
     if suffixes and path.suffix.lower() not in suffixes:
         raise ConfigError(f"{what}: {path} must end in {' or '.join(suffixes)} (the file is "
@@ -186,7 +186,6 @@ def clean_stale_temporaries(path: str | Path, min_age_s: float = 3600.0) -> list
     to ``path``: those whose writer process PID is gone (and, without a PID, older than
     ``min_age_s``). A writer running now keeps its file. Returns the removed paths.
     """
-    import time
     path = Path(path)
     removed: list[Path] = []
     if not path.parent.is_dir():
@@ -236,7 +235,6 @@ def open_dataset(path: str | Path, what: str = "input", load: bool = True) -> xr
     (use it as a context manager). A missing, empty, truncated or non-NetCDF file raises a
     one-line ConfigError naming it.
     """
-    from .config import ConfigError
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"{what}: file not found: {path}")

@@ -20,7 +20,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
-from .config import ConfigError, load_yaml, yaml12_numbers
+from .config import ConfigError, flat_config, load_yaml, yaml12_numbers
+from .isph.config import load_config
+from .da.config import resolve
+from .monitor.config import MonitorConfig
 
 Key = tuple  # a path into the config: ("isph", "dx") or ("user_cases", 0, "H0")
 
@@ -228,18 +231,14 @@ def check_jobs(jobs: Iterable[Job], sources: ConfigSources) -> int:
 
 # --- builders mirroring the rules' command lines ------------------------------------------------------
 def isph_job(label: str, source: Any, key: Key, keys: dict[str, Key], **overrides) -> Job:
-    from .isph.config import load_config
     return Job(label, lambda: load_config(source, **overrides), key, keys)
 
 
 def da_job(label: str, source: Any, key: Key, keys: dict[str, Key], deposition: bool, **overrides) -> Job:
-    from .da.config import resolve
     return Job(label, lambda: resolve(source, deposition=deposition, **overrides), key, keys)
 
 
 def monitor_job(label: str, key: Key, keys: dict[str, Key], **overrides) -> Job:
-    from .config import flat_config
-    from .monitor.config import MonitorConfig
     over = {k: (list(v) if isinstance(v, tuple) else v) for k, v in overrides.items()}
     return Job(label, lambda: flat_config(MonitorConfig, overrides=over, prefix="monitor"), key, keys)
 

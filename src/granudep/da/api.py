@@ -1,6 +1,8 @@
 """Python API of the DA model: ``run_da`` (→ xarray.Dataset) and ``warmup``."""
 from __future__ import annotations
 
+import math
+
 import xarray as xr
 
 from ..checkpoint import identity as checkpoint_identity
@@ -17,10 +19,9 @@ from .solver import simulate as _simulate
 
 
 def _k(cfg: DAConfig) -> tuple[float, float]:
-    import math as _m
     m = cfg.material
-    return earth_pressure_coefficients(cfg.numerics.earth_pressure, _m.radians(m.phi_internal_deg),
-                                       _m.radians(m.phi_basal_deg), cfg.theta)
+    return earth_pressure_coefficients(cfg.numerics.earth_pressure, math.radians(m.phi_internal_deg),
+                                       math.radians(m.phi_basal_deg), cfg.theta)
 
 
 def _check(rec, cfg, ds_fn):

@@ -7,6 +7,8 @@ import math
 import time
 
 import pandas as pd
+from .api import run_da
+from .energy import energy_report
 
 TOL = 0.01  # < 1 % change per doubling: converged
 
@@ -28,8 +30,6 @@ def ladder(n_min: int, n_max: int) -> list[int]:
 def doubling_study(case_or_config, deposition, n_min: int, n_max: int, run=None, **overrides) -> pd.DataFrame:
     """One run per N of the ladder (same config otherwise); a row per N with ``COLUMNS``.
     ``run``: the run function (default ``api.run_da``), for tests."""
-    from .api import run_da
-    from .energy import energy_report
     run = run or run_da
     rows = []
     for n in ladder(n_min, n_max):

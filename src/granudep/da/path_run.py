@@ -20,7 +20,7 @@ from ..config import ConfigError, to_yaml
 from ..front import flow_time
 from ..io import provenance, var
 from ..progress import LOG, Progress
-from .deposition import find_x_inf
+from .deposition import coefficients, find_x_inf
 from .errors import DARunError
 from .output import add_x_inf_history, run_attributes, run_variables
 from .path import Bed, bed_of
@@ -28,6 +28,8 @@ from .physics import earth_pressure_coefficients
 from .path_solver import PathSetup, bed_table, simulate_path
 from .step import AT_REST, D_DEFICIT, D_LIFT, D_WHERE, E_H, E_T, E_U, RUNNING
 from .solver import Physics
+from ..abtable import interpolate_ab
+import pandas as pd
 
 FRONT_DEFINITION = ("down-slope edge of the farthest down-slope contiguous run of grid cells whose total depth "
                     "h + h_D (SPH depth eq 20 on the grid / width, plus deposit) is >= front_depth_threshold and "
@@ -100,14 +102,12 @@ def earth_pressure_along(cfg, bed: Bed):
 
 def path_coefficients(cfg, setup: PathSetup):
     """(A, B, source): scalars, or arrays over the stations for ``geometry.path.ab_slope: local``."""
-    from .deposition import coefficients
     dep, pc = cfg.deposition, cfg.geometry.path
     if dep.ab_source != "computed":
         if pc.ab_slope == "local":
             raise ConfigError(f"geometry.path.ab_slope: 'local' needs deposition.ab_source 'computed' (a coefficient "
                               f"table to read at each slope; got ab_source {dep.ab_source!r})")
         return coefficients(cfg)
-    from ..abtable import interpolate_ab
     a = setup.H0 / setup.L0
     if pc.ab_slope == "release":
         th = math.degrees(setup.theta_release)
@@ -117,7 +117,6 @@ def path_coefficients(cfg, setup: PathSetup):
             raise ConfigError(f"geometry.path.ab_slope: 'release' reads A, B at the release zone's a = {a:.4g}, "
                               f"theta = {th:.4g} deg: {exc}") from None
         return float(A), float(B), f"computed ({dep.coefficients}, release zone a = {a:.4g}, theta = {th:.4g} deg)"
-    import pandas as pd
     table = pd.read_csv(dep.coefficients)
     lo, hi = float(table.theta_deg.min()), float(table.theta_deg.max())
     th = np.clip(np.degrees(setup.bed.theta), lo, hi)

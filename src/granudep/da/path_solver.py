@@ -47,6 +47,7 @@ from .driver import DARecord, Track, run
 from .path import N_TABLE, T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
 from .solver import custom_state, grid_spacing, step_params
 from .sph import F_K, F_ND, F_V, F_V0, N_FIELDS
+from ..cases import momentum_scale
 
 # time_step 'relative': |u| Δt <= CFL · GEOMETRY_STEP · σ (σ the path's smoothing length)
 GEOMETRY_STEP = 0.25
@@ -110,7 +111,6 @@ def path_track(setup: PathSetup, dxg: float) -> Track:
 
 def path_params(cfg, setup: PathSetup, phys, centripetal: bool):
     """The constant-θ ``StepParams`` with the path's stations, gate, scale and options."""
-    from ..cases import momentum_scale
     dep = cfg.deposition
     return step_params(cfg, phys, grid_spacing(cfg, setup.dx0, phys.deposition))._replace(
         x_min=0.0, x_max=float(setup.xi_end), L0=float(setup.xi_gate),

@@ -22,6 +22,11 @@ from ..config import ConfigError, build
 from . import analytic as an
 from .config import DAConfig, resolve
 from .verification_rows import row as _row
+from .api import _k, run_da
+from .path import straight_bed
+from .path_run import path_setup
+from .path_solver import bed_table, simulate_path
+from .solver import Physics, simulate
 
 TABLE5_RUN = {"case": "1D-A70", "numerics": {"n_particles": 300}, "output": {"dt_output": 0.05, "dx_grid": 2e-3}}
 
@@ -46,11 +51,6 @@ def slope_to_flat(folder: Path, theta_deg: float = 35.0, scale: float = 100.0, w
 
 def check_straight_path(quick: bool = False):
     """1D-A70 (300 particles, deposition with x∞ = 1.5 m) on a straight path vs the constant-θ run."""
-    from .api import _k, run_da
-    from .path import straight_bed
-    from .path_run import path_setup
-    from .path_solver import bed_table, simulate_path
-    from .solver import Physics, simulate
     cfg = resolve(TABLE5_RUN, deposition=True, x_inf_mode="user", x_inf=1.5)
     ka, kp = _k(cfg)
     phys = Physics(ka, kp, True, -0.0313, 0.0402, 1.5)
@@ -84,9 +84,6 @@ def coulomb_on_path(centripetal: bool, n: int = 8, cfl: float = 0.25, tmp: Path 
     """Independent Coulomb particles (k = 0, XSPH off, no deposition) released from rest on the
     35°-to-flat path (100 m scale, σ = 15 m, φ_B = 28°). Returns (bed, s0, trajectories s(t), u(t),
     final stations)."""
-    from .path_run import path_setup
-    from .path_solver import bed_table, simulate_path
-    from .solver import Physics
     own = tmp is None
     tdir = tempfile.TemporaryDirectory() if own else None
     folder = Path(tdir.name) if own else tmp
@@ -166,7 +163,6 @@ def _lab_config(csv: Path, **path):
 
 def check_path_mass_and_width(quick: bool = False):
     """Volume balance with deposition on the curved lab path; a 3 m wide uniform channel vs no width."""
-    from .api import run_da
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         ds = run_da(_lab_config(curved_lab_path(folder)), deposition=True)

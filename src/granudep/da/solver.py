@@ -30,6 +30,7 @@ from .path import N_TABLE, T_A, T_B, T_COS, T_KACT, T_KPASS, T_SIN, T_WIDTH
 from .driver import DARecord, Track, run
 from .sph import F_K, F_ND, F_U, F_V, F_V0, N_FIELDS
 from .step import StepParams
+from ..cases import G
 
 
 @dataclass(frozen=True)
@@ -62,7 +63,6 @@ def column_grid_spacing(cfg, phys: Physics) -> float:
 
 def step_params(cfg, phys: Physics, dx_grid: float | None = None) -> StepParams:
     """The run constants the numba stages read (``step.StepParams``), for a constant slope."""
-    from ..cases import G
     num, dep, mat = cfg.numerics, cfg.deposition, cfg.material
     return StepParams(
         g=float(G), cfl=float(num.cfl), xsph_delta=float(num.xsph_delta), kernel_support=float(num.kernel_support),

@@ -23,6 +23,12 @@ from . import analytic as an
 from .config import DAConfig
 from .solver import Physics, simulate
 from .verification_rows import COLUMNS, row as _row
+from .sph import evaluate
+from .api import run_da
+import tempfile
+from pathlib import Path
+from .path_verification import write_profile
+from .energy import energy_report
 
 
 
@@ -78,7 +84,6 @@ def check_dam_break(quick: bool = False, theta_deg: float = 0.0, delta_deg: floa
 def linear_fields(n: int = 400, spacing: float = 1e-3, L_factor: float = 4.0, q_c: float = 3.0):
     """Particles on a lattice with volumes V_j = Δx (c0 + c1 x_j) (so h = c0 + c1 x in the interior)
     and u = a + b x: returns (x, h, ∂h/∂x, ∂u/∂x, interior mask, c1, b)."""
-    from .sph import evaluate
     x = (np.arange(n) + 0.5) * spacing + 0.05
     c0, c1, a, b = 0.1, 0.5, 0.3, -2.0
     V = spacing * (c0 + c1 * x)
@@ -201,7 +206,6 @@ def check_deposition(quick: bool = False):
     """Deposition bookkeeping on 1D-A70 (300 particles, x∞ = 1.5 m): flowing + deposited volume equals
     the initial volume to round-off; with (hu)_C below every moving particle's momentum nothing
     deposits and the run equals the run without deposition."""
-    from .api import run_da
     case = {"case": "1D-A70", "numerics": {"n_particles": 300}, "output": {"dt_output": 0.05, "dx_grid": 2e-3}}
     ds = run_da(case, x_inf_mode="user", x_inf=1.5)
     v0 = float(ds.flowing_volume[0])
@@ -228,9 +232,6 @@ def energy_pile_config(switch: str, n: int = 4000, t_end: float = 120.0, folder=
     """The 1 km path of ``benchmarks/bench_da_convergence.py`` (30° over 600 m easing into a flat,
     σ = 20 m, 50 m × 5 m release, φ_I = 32°, φ_B = 28°, Savage–Hutter k: k_a = 1.007, k_p = 2.555),
     without deposition, to t_end: the pile that gained energy with the particle switch."""
-    import tempfile
-    from pathlib import Path
-    from .path_verification import write_profile
     t = math.tan(math.radians(30.0))
     folder = Path(folder or tempfile.mkdtemp(prefix="granudep-energy-"))
     csv = write_profile(folder / "km.csv", [0.0, 300.0, 600.0, 800.0, 1000.0], [600.0 * t, 300.0 * t, 0.0, 0.0, 0.0])
@@ -248,8 +249,6 @@ def energy_pile_config(switch: str, n: int = 4000, t_end: float = 120.0, folder=
 def check_energy(quick: bool = False, switch: str = "strain", n: int = 4000):
     """A pile coming to rest must not gain energy (``granudep.da.energy``): the Coulomb bound
     W_min/ΔE ≤ 1 and no rise of E between outputs, within ENERGY_RATIO_TOL / ENERGY_RISE_TOL."""
-    from .api import run_da
-    from .energy import energy_report
     ds = run_da(energy_pile_config(switch, n), deposition=False, progress=False)
     rep = energy_report(ds)
     old = ("the sign switch of eqs 8-9 fails this row (numerics.earth_pressure_switch particle): at N = 4000 E "

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..config import ConfigError
 from ..isph.analysis import failure_plane_angle
-from .common import (CRITICAL_SPEED, add_inputs, case_of, classify, colours, hide_unused, load, need,
+from .common import (CRITICAL_SPEED, add_inputs, case_of, classify, colours, load, need,
                      new_figure, note, panel_label, register, scales)
 
 PAPER_FAILURE_PLANE_DEG = 55.8   # Section 4.2.2, 2D non-DA SPH, φ = 25.5°

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import ConfigError
 from .common import load, need, new_figure, note, panel_label
 
 STYLE = {1: dict(color="C0", ls="-", label="with deposition"), 0: dict(color="C3", ls="--", label="no deposition")}

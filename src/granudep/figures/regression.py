@@ -11,6 +11,7 @@ import numpy as np
 from .. import cases
 from ..config import ConfigError
 from .common import add_inputs, classify, hide_unused, load_table, new_figure, note, panel_label, register
+import pandas as pd
 
 
 def fig12(critical, coefficients=None):
@@ -53,7 +54,6 @@ def fig12(critical, coefficients=None):
 def fig12_residuals(diagnosis, residuals):
     """Residual plot of eq 36: (a) baseline residuals vs [x] per case (colour: a);
     (b) R² of each refit variant per case vs a; (c) A per variant vs a at each θ."""
-    import pandas as pd
     diag = load_table(diagnosis, ("case", "a", "theta_deg", "variant", "A", "r2"), "fig12r diagnosis.csv")
     res = load_table(residuals, ("case", "a", "theta_deg", "x_norm", "residual"), "fig12r residuals.csv")
     fig, axes = new_figure(1, 3, panel=(4.6, 3.8))

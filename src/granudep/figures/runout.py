@@ -19,6 +19,7 @@ from ..report.reference_2d import load_reference, match_table5
 from ..config import ConfigError
 from .common import (add_inputs, case_of, classify, front_note, hide_unused, load, load_table, need, new_figure,
                      note, panel_label, register)
+from ..front import flow_time
 
 NO_FARIN = "Farin et al. (2014) measurements are not available to us: not shown"
 DA_STYLE = {1: dict(color="C0", ls="-", label="DA, with deposition"),
@@ -38,7 +39,6 @@ def _ref_case(ds) -> str:
 
 def fig15(da_runs, reference_runs=(), reference_tables=(), flow_time_tol: float = 1e-3):
     """Runout ΔL/L0 vs time, one panel per case."""
-    from ..front import flow_time
     by_case = defaultdict(list)
     thresholds = set()
     for r in da_runs:

@@ -23,6 +23,7 @@ from .errors import IsphBlowUp
 from .cg_dic import pcg_dic, pcg_dic_pair
 from .cg_two_level import pcg_two_level, pcg_two_level_free
 from .linsolve import BREAKDOWN, NONFINITE, pcg_jacobi, pcg_jacobi_pair
+from .amg import amg_pcg
 
 def _cg_jacobi(indptr, indices, data, rhs, guess, rtol, numerics):
     return pcg_jacobi(indptr, indices, data, rhs, guess, rtol, 0.0, 1000)
@@ -145,7 +146,6 @@ class LinearSystems:
 
     def solve_amg(self, indptr, indices, data, rhs, guess):
         """AMG-preconditioned CG (:mod:`.amg`, pyamg), with the direct fallback of :meth:`solve_cg`."""
-        from .amg import amg_pcg
         try:
             sol, it, info = amg_pcg(indptr, indices, data, rhs, guess, self.owner.cfg.numerics.solver_rtol, 200,
                                     self.owner.cfg.numerics.pressure_solver[4:])

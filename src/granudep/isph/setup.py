@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .config import IsphConfig
+from ..kernels import wendland_dwdr, wendland_w
 
 
 @dataclass
@@ -62,7 +63,6 @@ def build_particles(cfg: IsphConfig) -> Particles:
 
 def reference_concentration(h: float, dx: float) -> float:
     """C0 = Σ_j V W(r_ij) on a full square lattice (self included): the 'incompressible' value."""
-    from ..kernels import wendland_w
     n = int(math.ceil(2.0 * h / dx)) + 1
     k = np.arange(-n, n + 1) * dx
     X, Y = np.meshgrid(k, k)
@@ -72,7 +72,6 @@ def reference_concentration(h: float, dx: float) -> float:
 
 def reference_laplacian_sum(h: float, dx: float, eps2: float) -> float:
     """Σ_j 2 V F_ij on a full square lattice: the PPE diagonal of a particle with full support."""
-    from ..kernels import wendland_dwdr
     n = int(math.ceil(2.0 * h / dx)) + 1
     k = np.arange(-n, n + 1) * dx
     X, Y = np.meshgrid(k, k)
@@ -93,7 +92,6 @@ def lattice_constants(h_factor: float, eps_factor: float, layers: int, slip_leng
       only when b < dx: normalised by the no-slip sum (0.71 for h = 1.3 dx), a Navier wall with
       b ≥ dx had 1.35 times its stress, i.e. an effective slip length (d_1 + b)/1.35 − d_1 ≈ 0.73 b.
     """
-    from ..kernels import wendland_dwdr
     h = h_factor
     eps2 = eps_factor * h * h
     n = int(math.ceil(2.0 * h)) + 2

@@ -16,7 +16,13 @@ from ..verification_gate import row_passed
 from .config import load_config
 from .layer_reference import bagnold_initial, uniform_layer
 from .stepper import IsphSolver
-from .run import step_towards
+from .run import run, step_towards
+from .analysis import failure_plane_angle
+from .api import run_isph
+from ..cases import check_case_name, material as table2_material
+from .errors import IsphBlowUp
+from ..progress import Progress
+from importlib.resources import files
 
 COLUMNS = ["check", "quantity", "value", "reference", "error", "tolerance", "passed", "note"]
 
@@ -301,8 +307,6 @@ def collapse_t22a70(quick: bool = False) -> list[dict]:
     failure_plane_angle, rest_time_T22-A70). Until the basal slip became the default these rows
     carried tolerances of 5° and 3 t_c; with it they read 65.3° and 19.6 at 4 mm (no-slip bed: 57.9°,
     18.2), docs/verification.md."""
-    from .analysis import failure_plane_angle
-    from .api import run_isph
     dx = 0.008 if quick else 0.004
     ds = run_isph("T22-A70", dx=dx, progress_every_s=60.0)
     fp = failure_plane_angle(ds, t_norm=1.0)
@@ -333,7 +337,6 @@ def flat_collapse_config(material: str = "glass_beads", aspect: float = 0.5, dx:
     a·L0 high of a Table 2 material against the back wall, 0.6 m of bed, the default bed law (no slip;
     φ_B = φ of the material for the Coulomb and stress-limited laws), default scheme
     otherwise; run to rest."""
-    from ..cases import check_case_name, material as table2_material
     if not aspect > 0.0:
         raise ValueError(f"aspect: must be > 0 (got {aspect})")
     m = table2_material(material)
@@ -361,9 +364,6 @@ def dam_break(quick: bool = False, projection: str | None = None, resolutions=No
     2 sqrt(g H) (the inviscid shallow-water value; reported: real surges are slower, and the
     dam-break measurements themselves are not in this repository). ``projection``: the
     ``numerics.projection`` under test (None: the default; the check name carries any other)."""
-    from .errors import IsphBlowUp
-    from .run import run
-    from ..progress import Progress
     rows = []
     name = "dam_break" if projection is None else f"dam_break_{projection}"
     if resolutions is None:
@@ -407,7 +407,6 @@ def dam_break(quick: bool = False, projection: str | None = None, resolutions=No
 def martin_moyce_1952() -> tuple[np.ndarray, np.ndarray]:
     """The measured surge front of Martin & Moyce (1952), n² = 2, a = 2.25 in: (T = t sqrt(2 g/a),
     Z = z/a) from ``granudep/data/martin_moyce_1952.csv`` (provenance in its header)."""
-    from importlib.resources import files
     with files("granudep.data").joinpath("martin_moyce_1952.csv").open() as f:
         data = pd.read_csv(f, comment="#")
     return data["T"].to_numpy(float), data["Z"].to_numpy(float)

@@ -39,6 +39,7 @@ from .. import cases
 from ..progress import LOG
 from .config import RegressConfig
 from .critical import growth_fit, linear_fit, onset_time, value_at
+from ..io import open_dataset
 
 DIAGNOSIS_COLUMNS = ["case", "theta_deg", "a", "variant", "n_sections", "A", "B", "r2", "r2_quadratic",
                      "rms_residual", "y_mean", "y_range", "x_norm_zero", "x_norm_used", "note"]
@@ -164,7 +165,6 @@ def diagnose_case(sections: xr.Dataset, isph: xr.Dataset | None = None, wm: xr.D
 def diagnose(sections, isph=(), wm=(), cfg: RegressConfig | None = None) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Diagnosis table (:data:`DIAGNOSIS_COLUMNS`) and baseline residuals over every case.
     ``isph`` and ``wm`` files are matched to the sections by their ``case`` attribute."""
-    from ..io import open_dataset
 
     def by_case(paths):
         out = {}

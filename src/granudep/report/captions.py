@@ -9,6 +9,7 @@ import pandas as pd
 from .da_vs_reference import max_errors
 from .markdown import fmt, open_lazily, pct_mean, read_csv
 from .studies import _study_rows_isph
+from ..isph.analysis import bed_label, failure_plane_angle, final_runout
 
 
 def _wm_numbers(folder: Path) -> str:
@@ -95,7 +96,6 @@ def caption_numbers(results, convergence_dx=None) -> dict:
     run = root / "isph" / "T22-A70.nc"
     if run.is_file():
         def fig5():
-            from ..isph.analysis import failure_plane_angle
             with open_lazily(run) as ds:
                 fp = failure_plane_angle(ds, t_norm=1.0)
                 rest = float(ds["time_to_rest"].values)
@@ -109,7 +109,6 @@ def caption_numbers(results, convergence_dx=None) -> dict:
     fig6_runs = sorted((root / "isph").glob("fig6-*.nc"))  # the Fig 6 column's runs (workflow config fig6.runs)
     if fig6_runs:
         def fig6():
-            from ..isph.analysis import bed_label, final_runout
             parts = []
             for f in fig6_runs:
                 with open_lazily(f) as ds:

@@ -24,6 +24,8 @@ import pandas as pd
 
 from ..io import open_dataset
 from ..progress import LOG
+from ..isph.analysis import failure_plane_angle
+from ..cases import table3, table5
 
 CLAIM_COLUMNS = ["claim_id", "claim", "case", "paper_value", "unit", "ours_paper_res", "ours_converged",
                  "converged_dx_mm", "verdict", "basis", "test", "tolerance", "note", "source", "our_source"]
@@ -102,7 +104,6 @@ def _failure_angle(path) -> tuple[float, float]:
     """Failure-plane inclination from the *horizontal* (Rankine's θ_F = 45° + φ/2 is measured from the
     horizontal, the major principal stress in the column being vertical): the one definition of
     `isph.analysis.failure_plane_angle` (the verification table and Fig 5 use it too)."""
-    from ..isph.analysis import failure_plane_angle
     with open_dataset(path) as ds:
         fp = failure_plane_angle(ds, t_norm=1.0)
         return fp["angle_horizontal_deg"], float(ds.attrs.get("dx", math.nan))
@@ -131,7 +132,6 @@ def _converged_dx_mm(converged_ref: pd.DataFrame | None, case: str) -> float:
 def acceleration_change(dep_path, nodep_path) -> float:
     """Largest |runout(dep) − runout(no dep)| up to the time the no-deposition front speed peaks,
     over the final no-deposition runout (the claim "runout does not change in the acceleration phase")."""
-    import xarray as xr
     with open_dataset(dep_path) as d, open_dataset(nodep_path) as n:
         tn, rn = n["time"].values, n["runout"].values
         td, rd = d["time"].values, d["runout"].values
@@ -162,7 +162,6 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
     # --- Table 3 ---------------------------------------------------------------------------------
     t3 = _read(root / "regression" / "table3_comparison.csv")
     t3c = _read(creg / "table3_comparison.csv") if creg else None
-    from ..cases import table3
     for _, p in table3().iterrows():
         for xm in (0.2, 0.4, 0.6, 0.8):
             ours = fit = conv = float("nan")
@@ -189,7 +188,6 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
     # --- Table 5 ---------------------------------------------------------------------------------
     t5 = _read(root / "regression" / "table5_comparison.csv")
     t5c = _read(creg / "table5_comparison.csv") if creg else None
-    from ..cases import table5
     for _, p in table5().iterrows():
         for q in ("A", "B"):
             ours = conv = r2 = alt = float("nan")
@@ -263,7 +261,6 @@ def scorecard(results="results", converged_regression=None) -> pd.DataFrame:
     spec = specs["wm_rms"]
     wm = sorted((root / "wm").glob("*.nc")) if (root / "wm").is_dir() else []
     if wm:
-        import xarray as xr
         vals = []
         for fw in wm:
             with open_dataset(fw) as ds:

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Callable
 
 import pandas as pd
+from ..da.api import run_da
 
 #: the Table 5 DA cases, in the order of a/H0
 DA_CASES = ("1D-A30", "1D-A45", "1D-A70", "1D-A124")
@@ -29,7 +30,6 @@ def two_d_case(row) -> str:
 
 
 def _run_runout(case: str, n_particles: int, deposition) -> float:
-    from ..da.api import run_da
     ds = run_da(case, deposition=deposition, n_particles=n_particles, progress=False)
     return float(ds["final_runout_norm"])
 

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from ..io import open_dataset
 
 
 def fmt(v, spec: str = ".3g") -> str:
@@ -50,5 +51,4 @@ def pct_mean(s: pd.Series) -> str:
 
 def open_lazily(path):
     """A run or sections file, lazily, in the stages' dimension order and with times in seconds."""
-    from ..io import open_dataset
     return open_dataset(path, load=False)

@@ -14,11 +14,12 @@ from pathlib import Path
 import pandas as pd
 
 from ..config import ConfigError
+import xarray as xr
+from ..io import check_output, write_text
 
 
 def one_run(coefficients: str | Path, da: str | Path) -> dict:
     """A, B (one-row coefficients.csv) and the DA run's final_runout_norm, flow_time (NaN if absent)."""
-    import xarray as xr
     for f in (coefficients, da):
         if not Path(f).is_file():
             raise ConfigError(f"sensitivity-table: file not found: {f}")
@@ -67,7 +68,6 @@ def _pairs(items: list[str], what: str) -> list[tuple[str, str]]:
 
 
 def _cmd(args) -> int:
-    from ..io import check_output, write_text
     check_output(args.output, suffixes=(".csv",))
     try:
         baseline_values = {k: float(v) for k, v in _pairs(args.baseline_values, "--baseline-values")}

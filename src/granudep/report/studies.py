@@ -8,12 +8,12 @@ import numpy as np
 import pandas as pd
 
 from .markdown import md_table, not_available, open_lazily, read_csv
+from .reference_2d import reference_row
 
 
 def _study_rows_isph(folder: Path, dx=None) -> pd.DataFrame:
     """One row per 2D run in ``folder``; with ``dx`` (m) only the runs at those resolutions (the
     configured list: a run left over from an earlier list is not a convergence result)."""
-    from .reference_2d import reference_row
     rows = []
     for f in sorted(folder.glob("*.nc")):
         with open_lazily(f) as ds:

@@ -13,7 +13,6 @@ import os
 import re
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from .._version import __version__
@@ -21,6 +20,9 @@ from .da_vs_reference import PAPER_MAX_ERRORS, improvement, max_errors
 from .markdown import md_table, not_available, pct_mean, read_csv
 from .studies import section_convergence, section_sensitivity
 from ..verification_gate import FAIL, PASS, REPORTED, count, statuses
+from .readme_status import variant_lines
+from .claims import tally
+from .da_readings import pivot_markdown
 
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -177,9 +179,7 @@ def section_reading_matrix(matrix, maxima) -> str:
 def section_variants(results) -> str:
     """The variant chains' scorecards (``results/variants/<name>``, config/variants/<name>.yaml) beside
     the reproduction's; empty when no variant chain has been run."""
-    from pathlib import Path
 
-    from .readme_status import variant_lines
     if results is None:
         return ""
     lines = variant_lines(Path(results))
@@ -193,7 +193,6 @@ def section_variants(results) -> str:
 
 def section_claims(card: pd.DataFrame | None) -> str:
     """The claims scorecard (granudep.report.claims.scorecard)."""
-    from .claims import tally
     out = ["## Claims scorecard: every quantitative claim of the paper\n"]
     if card is None or card.empty:
         return "\n".join(out) + "_Not available: the scorecard was not built._\n"
@@ -352,7 +351,6 @@ def section_da_readings(path) -> str:
     df = read_csv(path)
     if df is None or df.empty:
         return "\n".join(out) + not_available("DA runs per (hu)_C reading", path)
-    from .da_readings import pivot_markdown
     n = ", ".join(str(v) for v in sorted(set(df["n_particles"])))
     out.append(f"Source: `{path}` (`granudep da-readings`). Each row's A, B (from the regression diagnosis, "
                f"read as normalised) drive the DA with deposition (N = {n}); error = DA ΔL/L0 / 2D reference − 1 "
