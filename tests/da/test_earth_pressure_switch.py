@@ -9,7 +9,7 @@ import pytest
 import naive_da as nv
 from granudep.config import ConfigError
 from granudep.da.config import resolve
-from granudep.da.sph import evaluate_into, symmetric_pressure_gradient
+from granudep.da.sph import S_DH, S_DU, S_KB, evaluate_into, new_stage, new_window, symmetric_pressure_gradient
 
 
 def _lattice(n=160, wall=False, seed=3):
@@ -23,13 +23,11 @@ def _lattice(n=160, wall=False, seed=3):
 
 def _kernel_pass(x, u, V, L, qc, wall, k):
     n = x.size
-    xe, ue, Ve, he = (np.empty(2 * n) for _ in range(4))
-    lo, hi = np.empty(n, np.int64), np.empty(n, np.int64)
-    h, nd, dh, du, xs = (np.empty(n) for _ in range(5))
-    E = evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h, nd, dh, du, xs, np.empty(0))
-    kdh, kbar = np.empty(n), np.empty(n)
-    symmetric_pressure_gradient(x, L, qc, wall, xe, Ve, he, lo, hi, E, k, np.empty(2 * n), kdh, kbar)
-    return kdh, kbar, dh, du
+    W, S = new_window(n), new_stage(n)
+    E = evaluate_into(x, u, V, L, qc, wall, W, S, np.empty(0))
+    dh, du = S[S_DH].copy(), S[S_DU].copy()
+    symmetric_pressure_gradient(x, L, qc, wall, W, E, k, np.empty(2 * n), S)
+    return S[S_DH], S[S_KB], dh, du
 
 
 @pytest.mark.parametrize("wall", [False, True])

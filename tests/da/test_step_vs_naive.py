@@ -41,8 +41,8 @@ def _kernel_step(x, u, V, V0, nd, dep, depb, binv, p, tab, ng_env=0, k_state=Non
     dep, depb = dep.copy(), depb.copy()
     env = np.zeros((3, ng_env))
     env[2] = np.inf
-    out = advance(xk, F, order, dep, depb if p.has_width else dep, binv, env, np.zeros(3), 0.0, 10.0,
-                  p._replace(max_steps=1), tab, 0, own_trail(x.size))
+    out = advance((xk, F, order), (dep, depb if p.has_width else dep, binv, own_trail(x.size)), (env, np.zeros(3)),
+                  0.0, 10.0, p._replace(max_steps=1), tab, 0)
     assert out[2] == MAX_STEPS and out[1] == 1          # exactly one step taken
     assert np.all(order == np.arange(x.size))           # the test states stay sorted
     return xk, F, dep, depb, out[5], out[4]

@@ -159,8 +159,8 @@ def run(cfg, track: Track, prm, tab, state, phys, label: str = "", progress=None
     dt_out, t_end = cfg.output.dt_output, cfg.numerics.t_end
     while True:
         t_target = min(k * dt_out, t_end)
-        t, steps, status, where, L, dt = advance(x, F, order, dep, depb, binv, rec.envelopes, rec.diag, t, t_target,
-                                                 prm, tab, steps, own)
+        t, steps, status, where, L, dt = advance((x, F, order), (dep, depb, binv, own), (rec.envelopes, rec.diag),
+                                                 t, t_target, prm, tab, steps)
         if status in (RUNNING, AT_REST):
             record_output(rec, cfg, track, x, F, order, dep, t, L, dt, steps)
         if progress is not None:

@@ -18,6 +18,18 @@ from .neighbours import build_extended, count_ghosts, windows
 F_U, F_V, F_V0, F_ND, F_H, F_K = 0, 1, 2, 3, 4, 5
 N_FIELDS = 6
 
+# rows of a stage matrix S (one per stage of the step, sorted order): what the operators give at the
+# stage's positions. S_H depth (eq 20; an area until ``step.bed_terms`` divides by the width), S_ND
+# number density, S_DH ∂h/∂s (eqs 21–22; k-weighted in pair form), S_DU ∂u/∂s (eqs 28–29), S_XS the
+# XSPH sum (eq 33), S_GB −∂h_D/∂s (deposit as bed), S_GS g sinθ, S_GC g cosθ, S_FC the friction
+# deceleration, S_K the k that multiplies S_DH, S_KB the pair-mean k of the width term.
+S_H, S_ND, S_DH, S_DU, S_XS, S_GB, S_GS, S_GC, S_FC, S_K, S_KB = range(11)
+N_STAGE = 11
+
+# The neighbour window W of a stage: the extended arrays (mirror ghosts first, then the particles)
+# of positions xe, velocities ue, volumes Ve, depths he, and each real particle's window [lo, hi)
+# into them; a tuple so that the passes take one argument for it (``new_window``).
+
 # fast-math for the pair passes WITHOUT 'reassoc': re-associated (vectorised) sums depend on the
 # alignment of the pair buffer and made two identical runs differ in the last bit.
 FASTMATH = {"nsz", "arcp", "contract", "afn"}
@@ -28,15 +40,34 @@ FASTMATH = {"nsz", "arcp", "contract", "afn"}
 SHEPARD_FLOOR = 0.5
 
 
+@njit(cache=True)
+def new_window(n):
+    """The neighbour window W of n particles (room for n ghosts)."""
+    return (np.empty(2 * n), np.zeros(2 * n), np.empty(2 * n), np.empty(2 * n), np.empty(n, np.int64),
+            np.empty(n, np.int64))
+
+
+@njit(cache=True)
+def new_stage(n):
+    """A stage matrix S of n particles (``S_*`` rows): the deposit term 0 and k̄ 1 until set."""
+    S = np.empty((N_STAGE, n))
+    S[S_GB] = 0.0
+    S[S_KB] = 1.0
+    return S
+
+
 @njit(cache=True, fastmath=FASTMATH)
-def depth_pass(xe, Ve, m, n, lo, hi, L, norm, qc, h, nd, E):
+def depth_pass(W, m, n, kn, h, nd, E):
     """Eq 20, h_i = Σ_j V_j W_ij, and the number density Σ_j W_ij over particles with volume.
     Stores e^{−q²} of every pair in E (the windows of i = 0, 1, … one after the other) so the
     gradient pass needs no second exponential.
 
     Each exponential is evaluated once per pair of real particles: for j < i the value stored in
     j's window is reused (q² of (i, j) and (j, i) are the same floating-point number, so the
-    results are bit for bit those of one exponential per ordered pair, at half the cost)."""
+    results are bit for bit those of one exponential per ordered pair, at half the cost).
+    W: the window (``new_window``), m ghosts first; kn = (L, kernel norm, q_c)."""
+    xe, _, Ve, _, lo, hi = W
+    L, norm, qc = kn
     qc2 = qc * qc
     ec = math.exp(-qc2)
     off = np.empty(n, np.int64)
@@ -66,7 +97,7 @@ def depth_pass(xe, Ve, m, n, lo, hi, L, norm, qc, h, nd, E):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, E, dhdx, dudx, xsph):
+def gradient_pass(W, m, n, kn, E, dhdx, dudx, xsph):
     """Eqs 21–22 (∂h/∂x), eqs 28–29 (∂u/∂x, eq 29's sign corrected) and the XSPH sum of eq 33.
 
     With eq 24's ∇W_ij = 2 r_ij/L² W'_ij = −∂W_ij/∂x_i (r_ij = x_i − x_j, ``kernels.gauss_gradw``):
@@ -75,6 +106,8 @@ def gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, E, dhdx, dudx, xsph
     which returns −∂u/∂x). Both are exact for linear fields where the kernel support is full; B2 is
     exact for a linear u everywhere. E holds e^{−q²} of every pair from ``depth_pass``.
     """
+    xe, ue, Ve, he, lo, hi = W
+    L, norm, qc = kn
     qc2 = qc * qc
     ec = math.exp(-qc2)
     g2 = 2.0 * norm / (L * L)
@@ -119,11 +152,14 @@ def gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, E, dhdx, dudx, xsph
 
 
 @njit(cache=True)
-def evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h, nd, dhdx, dudx, xsph, E):
+def evaluate_into(x, u, V, L, qc, wall, W, S, E):
     """Depth (eq 20), gradients (eqs 21–22, 28–29) and XSPH sum (eq 33) of all particles at
-    positions x (sorted) and velocities u. ``E`` is the pair buffer: grown (and returned) when the
-    pairs do not fit, so a kernel that keeps the returned buffer allocates it once per call of
-    ``step.advance`` instead of twice per step."""
+    positions x (sorted) and velocities u, into the rows S_H, S_ND, S_DH, S_DU, S_XS of the stage
+    matrix S; W: the neighbour window it fills (``new_window``). ``E`` is the pair buffer: grown
+    (and returned) when the pairs do not fit, so a kernel that keeps the returned buffer allocates
+    it once per call of ``step.advance`` instead of twice per step."""
+    xe, ue, Ve, he, lo, hi = W
+    h, nd = S[S_H], S[S_ND]
     n = x.shape[0]
     radius = qc * L
     norm = kernel_norm(L, qc)
@@ -136,17 +172,18 @@ def evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h, nd, dhdx, dud
         npairs += hi[i] - lo[i]
     if E.shape[0] < npairs:
         E = np.empty(npairs + npairs // 4)
-    depth_pass(xe, Ve, m, n, lo, hi, L, norm, qc, h, nd, E)
+    kn = (L, norm, qc)
+    depth_pass(W, m, n, kn, h, nd, E)
     for k in range(m):
         he[k] = h[m - 1 - k]
     for i in range(n):
         he[m + i] = h[i]
-    gradient_pass(xe, ue, Ve, he, m, n, lo, hi, L, norm, qc, E, dhdx, dudx, xsph)
+    gradient_pass(W, m, n, kn, E, S[S_DH], S[S_DU], S[S_XS])
     return E
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def symmetric_pressure_pass(xe, Ve, he, ke, m, n, lo, hi, L, norm, qc, E, kdh, kbar):
+def symmetric_pressure_pass(W, ke, m, n, kn, E, kdh, kbar):
     """The earth-pressure gradient in symmetric (pair) form: kdh_i = −Σ_j V_j ½(k_i + k_j) ∇W_ij / S_i
     with S_i = max(Σ_j V_j/h_j W_ij, SHEPARD_FLOOR), i.e. ∂h/∂x of ``gradient_pass`` (eqs 21–22) with
     the pair's mean k inside the sum, and kbar_i = Σ V_j ½(k_i + k_j) |∇W_ij| / Σ V_j |∇W_ij| (the k of
@@ -157,6 +194,8 @@ def symmetric_pressure_pass(xe, Ve, he, ke, m, n, lo, hi, L, norm, qc, E, kdh, k
     L_s the rate of E = Σ V (u²/2 + g z + g cosθ h/2) it gives is −(g cosθ/2) Σ_i V_i (k_i − 1) dh_i/dt,
     never positive when k_i ≥ 1 where dh_i/dt > 0 (∂u/∂x_i < 0: k_p) and k_i ≤ 1 where it is < 0 (k_a).
     ke: k of the extended particles (ghosts first); E: e^{−q²} of every pair from ``depth_pass``."""
+    xe, _, Ve, he, lo, hi = W
+    L, norm, qc = kn
     qc2 = qc * qc
     ec = math.exp(-qc2)
     g2 = 2.0 * norm / (L * L)
@@ -197,34 +236,33 @@ def symmetric_pressure_pass(xe, Ve, he, ke, m, n, lo, hi, L, norm, qc, E, kdh, k
 
 
 @njit(cache=True)
-def symmetric_pressure_gradient(x, L, qc, wall, xe, Ve, he, lo, hi, E, k, ke, kdh, kbar):
-    """``symmetric_pressure_pass`` over the extended arrays that ``evaluate_into`` just filled for the
-    same positions x (xe, Ve, he, lo, hi, E); k: each real particle's k (a ghost takes its mirror
-    particle's). kdh, kbar: outputs, sorted order; ke: work array (≥ ghosts + n)."""
+def symmetric_pressure_gradient(x, L, qc, wall, W, E, k, ke, S):
+    """``symmetric_pressure_pass`` over the window W and pair buffer E that ``evaluate_into`` just
+    filled for the same positions x; k: each real particle's k (a ghost takes its mirror
+    particle's). Outputs: the rows S_DH (k-weighted ∂h/∂s) and S_KB (k̄) of S; ke: work array (≥ ghosts + n)."""
     n = x.shape[0]
     m = count_ghosts(x, qc * L, wall)
     for g in range(m):
         ke[g] = k[m - 1 - g]
     for i in range(n):
         ke[m + i] = k[i]
-    symmetric_pressure_pass(xe, Ve, he, ke, m, n, lo, hi, L, kernel_norm(L, qc), qc, E, kdh, kbar)
+    symmetric_pressure_pass(W, ke, m, n, (L, kernel_norm(L, qc), qc), E, S[S_DH], S[S_KB])
 
 
 @njit(cache=True)
-def evaluate(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h, nd, dhdx, dudx, xsph):
-    """``evaluate_into`` with a pair buffer of its own."""
-    evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h, nd, dhdx, dudx, xsph, np.empty(0))
+def evaluate(x, u, V, L, qc, wall):
+    """``evaluate_into`` with a window, stage matrix and pair buffer of its own; returns the stage matrix."""
+    S = new_stage(x.shape[0])
+    evaluate_into(x, u, V, L, qc, wall, new_window(x.shape[0]), S, np.empty(0))
+    return S
 
 
 @njit(cache=True)
 def particle_depths(x, V, L, qc, wall):
     """Eq 20 at the (sorted) particle positions."""
     n = x.shape[0]
-    xe = np.empty(2 * n)
-    ue = np.zeros(2 * n)
-    Ve = np.empty(2 * n)
-    lo = np.empty(n, np.int64)
-    hi = np.empty(n, np.int64)
+    W = new_window(n)
+    xe, ue, Ve, _, lo, hi = W
     h = np.empty(n)
     nd = np.empty(n)
     radius = qc * L
@@ -234,7 +272,7 @@ def particle_depths(x, V, L, qc, wall):
     npairs = 0
     for i in range(n):
         npairs += hi[i] - lo[i]
-    depth_pass(xe, Ve, m, n, lo, hi, L, kernel_norm(L, qc), qc, h, nd, np.empty(npairs))
+    depth_pass(W, m, n, (L, kernel_norm(L, qc), qc), h, nd, np.empty(npairs))
     return h
 
 
@@ -277,8 +315,10 @@ def deposit_to_grid(dep, xp, dv, dxg):
 
 
 @njit(cache=True, inline="always")
-def _deposit_cells_gradient(s, dep, xi, sign, k0, k1, dxg, L, qc2, ec, g2):
-    """s + Σ_k dep_k ∇W(x_i − sign·x_k) over the cells k0 … k1 (sign −1: the mirror images at the wall)."""
+def _deposit_cells_gradient(s, dep, xi, sign, k0, k1, c):
+    """s + Σ_k dep_k ∇W(x_i − sign·x_k) over the cells k0 … k1 (sign −1: the mirror images at the
+    wall); c = (cell, L, q_c², e^{−q_c²}, 2 norm/L²)."""
+    dxg, L, qc2, ec, g2 = c
     for k in range(k0, k1 + 1):
         if dep[k] == 0.0:
             continue
@@ -299,6 +339,7 @@ def deposit_gradient(x, V, dep, dxg, L, qc, wall, out):
     qc2 = qc * qc
     ec = math.exp(-qc2)
     g2 = 2.0 * norm / (L * L)
+    c = (dxg, L, qc2, ec, g2)
     for i in range(x.shape[0]):
         out[i] = 0.0
         if V[i] <= 0.0:
@@ -306,8 +347,8 @@ def deposit_gradient(x, V, dep, dxg, L, qc, wall, out):
         xi = x[i]
         k0 = max(0, int(math.floor((xi - radius) / dxg)))
         k1 = min(ng - 1, int(math.floor((xi + radius) / dxg)) + 1)
-        s = _deposit_cells_gradient(0.0, dep, xi, 1.0, k0, k1, dxg, L, qc2, ec, g2)
+        s = _deposit_cells_gradient(0.0, dep, xi, 1.0, k0, k1, c)
         if wall and xi < radius:
             k1 = min(ng - 1, int(math.floor((radius - xi) / dxg)) + 1)
-            s = _deposit_cells_gradient(s, dep, xi, -1.0, 0, k1, dxg, L, qc2, ec, g2)
+            s = _deposit_cells_gradient(s, dep, xi, -1.0, 0, k1, c)
         out[i] = -s

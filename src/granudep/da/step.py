@@ -40,7 +40,8 @@ from .physics import (alpha_coefficient, bed_normal_acceleration, coulomb_update
                       earth_pressure_wave_factor, heun_friction_budget,
                       momentum_rate, net_acceleration, wave_speed_absolute, wave_speed_relative)
 from .kernels import gauss_gradw_e, kernel_norm
-from .sph import (F_H, F_K, F_ND, F_U, F_V, F_V0, deposit_gradient, deposit_to_grid, evaluate_into,
+from .sph import (F_H, F_K, F_ND, F_U, F_V, F_V0, S_DH, S_DU, S_FC, S_GB, S_GC, S_GS, S_H, S_K, S_KB, S_ND,
+                  S_XS, deposit_gradient, deposit_to_grid, evaluate_into, new_stage, new_window,
                   symmetric_pressure_gradient)
 
 # status codes returned by ``advance``
@@ -147,12 +148,14 @@ def smoothing_length(F, p):
 
 
 @njit(cache=True)
-def bed_terms(x, u, V, h, dh, du, tab, p, gs, gc, fc, k, kb, diag):
-    """Per-particle bed quantities at stage positions x and velocities u: turns the SPH area h (in
-    place) into the depth and dh into ∂h/∂s (width), and fills g sinθ (gs), g cosθ (gc), the
-    friction deceleration tanφ_B N⁺ (fc; N < 0 is clipped and counted in ``diag``) and k (k).
-    With ``p.k_symmetric`` dh holds Σ ½(k_i + k_j) ∂A (``sph.symmetric_pressure_gradient``) and kb
-    the pair-mean k: dh becomes the k-weighted ∂h/∂s (width term with kb) and k is set to 1."""
+def bed_terms(x, u, V, S, tab, p, diag):
+    """Per-particle bed quantities at stage positions x and velocities u (rows of the stage matrix
+    S): turns the SPH area S_H (in place) into the depth and S_DH into ∂h/∂s (width), and fills
+    g sinθ (S_GS), g cosθ (S_GC), the friction deceleration tanφ_B N⁺ (S_FC; N < 0 is clipped and
+    counted in ``diag``) and k (S_K). With ``p.k_symmetric`` S_DH holds Σ ½(k_i + k_j) ∂A
+    (``sph.symmetric_pressure_gradient``) and S_KB the pair-mean k: S_DH becomes the k-weighted
+    ∂h/∂s (width term with S_KB) and k is set to 1."""
+    h, dh, du, gs, gc, fc, k, kb = S[S_H], S[S_DH], S[S_DU], S[S_GS], S[S_GC], S[S_FC], S[S_K], S[S_KB]
     ns = tab.shape[1]
     g = p.g
     for i in range(x.shape[0]):
@@ -261,10 +264,11 @@ def time_step(u, V, h, du, L, p, wf):
 
 
 @njit(cache=True)
-def drive_and_deposition(x, u, V, h, dh, du, gb, gs, gc, fc, k, tab, p, dt, a, fr, fdv):
-    """Stage 1: driving acceleration a (eqs 11/27), the deposited fraction fr (eqs 14, 34, 36; none
-    where the bed is steeper than ``deposit_max_tan``) and the predictor's Coulomb budget fdv = F Δt
-    (+ the eq 12 loss)."""
+def drive_and_deposition(x, u, V, S, tab, p, dt, a, fr, fdv):
+    """Stage 1 (S its stage matrix): driving acceleration a (eqs 11/27), the deposited fraction fr
+    (eqs 14, 34, 36; none where the bed is steeper than ``deposit_max_tan``) and the predictor's
+    Coulomb budget fdv = F Δt (+ the eq 12 loss)."""
+    h, dh, du, gb, gs, gc, fc, k = S[S_H], S[S_DH], S[S_DU], S[S_GB], S[S_GS], S[S_GC], S[S_FC], S[S_K]
     ns = tab.shape[1]
     for i in range(x.shape[0]):
         fr[i] = 0.0
@@ -301,10 +305,14 @@ def predictor(x, u, V, a, fdv, dt, p, xt, ut):
 
 
 @njit(cache=True)
-def corrector(x, u, V, a1, dh2, gb2, xs2, gs2, gc2, fc1, fc2, k2, fr, dt, p, xn, un):
+def corrector(x, u, V, a1, S1, S2, fr, dt, p, new):
     """Eqs 30, 33, 31: u^{n+1} = u + ½Δt (a₁ + a₂) under the Heun friction budget (+ eq 12),
-    x^{n+1} = x + Δt (½(u + u^{n+1}) + δ XSPH). Returns (status, sorted index of the offending
-    particle or −1): NONFINITE, or ESCAPED below x_min / above x_max."""
+    x^{n+1} = x + Δt (½(u + u^{n+1}) + δ XSPH), into new = (x^{n+1}, u^{n+1}); S1, S2: the two
+    stages. Returns (status, sorted index of the offending particle or −1): NONFINITE, or ESCAPED
+    below x_min / above x_max."""
+    xn, un = new
+    fc1 = S1[S_FC]
+    dh2, gb2, xs2, gs2, gc2, fc2, k2 = S2[S_DH], S2[S_GB], S2[S_XS], S2[S_GS], S2[S_GC], S2[S_FC], S2[S_K]
     for i in range(x.shape[0]):
         if V[i] <= 0.0:
             un[i] = 0.0
@@ -459,10 +467,13 @@ def exclude_own_deposit(x, V, order, own, dxg, L, qc, wall, gb):
 
 
 @njit(cache=True)
-def commit(x, F, xn, un, fr, dep, depb, binv, p, order, own):
-    """x, u ← x^{n+1}, u^{n+1}; the deposited fraction of each particle's volume goes onto the grid
-    (all of it below min_volume_fraction of the initial volume: the particle stops), booked in
-    ``own`` (rows by particle id ``order[i]``) when the own deposit is excluded. Returns max |u|."""
+def commit(x, F, new, fr, D, p, order):
+    """x, u ← new = (x^{n+1}, u^{n+1}); the deposited fraction of each particle's volume goes onto
+    the grid D = (dep, depb, binv, own) (all of it below min_volume_fraction of the initial volume:
+    the particle stops), booked in ``own`` (rows by particle id ``order[i]``) when the own deposit is
+    excluded. Returns max |u|."""
+    xn, un = new
+    dep, depb, binv, own = D
     u = F[F_U]
     V = F[F_V]
     umax = 0.0
@@ -495,36 +506,31 @@ def commit(x, F, xn, un, fr, dep, depb, binv, p, order, own):
 # ----------------------------------------------------------------------------------------------
 
 @njit(cache=True)
-def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps, own):
+def advance(state, D, rec, t, t_target, p, tab, nsteps):
     """Step from t until t_target (exactly), rest, or a failure. Returns
     (t, nsteps, status, id of the offending particle or −1, L_s, Δt of the last step).
 
-    x, F, order: sorted particle state (``sph.F_*`` rows); dep: deposited volume per grid cell;
-    depb, binv: deposit / width and 1/width per cell (``p.has_width``; otherwise unused);
-    env: (3, n_cells) envelopes or (3, 0); diag: lift-off diagnostics (3,); p: ``StepParams``;
-    tab: bed table (``path.N_TABLE`` rows over the stations); own: ``own_trail`` (each particle's
-    own deposit, excluded from its bed term) or a (0, 0) array."""
+    state = (x, F, order): sorted particle state (``sph.F_*`` rows); D = (dep, depb, binv, own): the
+    deposited volume per grid cell, deposit / width and 1/width per cell (``p.has_width``; otherwise
+    unused), and ``own_trail`` (each particle's own deposit, excluded from its bed term) or a (0, 0)
+    array; rec = (env, diag): (3, n_cells) envelopes or (3, 0), lift-off diagnostics (3,); p:
+    ``StepParams``; tab: bed table (``path.N_TABLE`` rows over the stations)."""
+    x, F, order = state
+    dep, depb, binv, own = D
+    env, diag = rec
     n = x.shape[0]
     qc = p.kernel_support
     wall = p.back_wall
     bed = p.deposition and p.deposit_as_bed
     bed_dep = depb if p.has_width else dep
     mine = bed and own.shape[0] > 0 and not p.own_deposit
-    xe = np.empty(2 * n)
-    ue = np.empty(2 * n)
-    Ve = np.empty(2 * n)
-    he = np.empty(2 * n)
-    lo = np.empty(n, np.int64)
-    hi = np.empty(n, np.int64)
+    W = new_window(n)
     E = np.empty(0)
-    h1, nd1, dh1, du1, xs1 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    h2, nd2, dh2, du2, xs2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    gs1, gc1, fc1, k1 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    gs2, gc2, fc2, k2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    S1, S2 = new_stage(n), new_stage(n)
     a1, ut, xt, un, xn = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    new = (xn, un)
     fr, fdv = np.zeros(n), np.zeros(n)
-    gb1, gb2 = np.zeros(n), np.zeros(n)
-    kb1, kb2, kp, ke = np.ones(n), np.ones(n), np.empty(n), np.empty(2 * n)
+    kp, ke = np.empty(n), np.empty(2 * n)
     strain = p.k_symmetric and p.k_strain > 0.0
     wf, ks = np.ones(n), np.empty(n)
     L = 0.0
@@ -538,50 +544,50 @@ def advance(x, F, order, dep, depb, binv, env, diag, t, t_target, p, tab, nsteps
         u = F[F_U]
         V = F[F_V]
         # stage 1 at (x^n, u^n)
-        E = evaluate_into(x, u, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h1, nd1, dh1, du1, xs1, E)
+        E = evaluate_into(x, u, V, L, qc, wall, W, S1, E)
         if strain:
-            strained_k(x, V, F[F_K], du1, 0.0, tab, p, kp)
+            strained_k(x, V, F[F_K], S1[S_DU], 0.0, tab, p, kp)
             strained_wave_factor(x, tab, p, wf)
-            symmetric_pressure_gradient(x, L, qc, wall, xe, Ve, he, lo, hi, E, kp, ke, dh1, kb1)
+            symmetric_pressure_gradient(x, L, qc, wall, W, E, kp, ke, S1)
         elif p.k_symmetric:
-            particle_k(x, du1, tab, p, kp)
-            symmetric_pressure_gradient(x, L, qc, wall, xe, Ve, he, lo, hi, E, kp, ke, dh1, kb1)
+            particle_k(x, S1[S_DU], tab, p, kp)
+            symmetric_pressure_gradient(x, L, qc, wall, W, E, kp, ke, S1)
         if bed:
-            deposit_gradient(x, V, bed_dep, p.dx_grid, Ld, qc, wall, gb1)
+            deposit_gradient(x, V, bed_dep, p.dx_grid, Ld, qc, wall, S1[S_GB])
             if mine:
-                exclude_own_deposit(x, V, order, own, p.dx_grid, Ld, qc, wall, gb1)
-        bed_terms(x, u, V, h1, dh1, du1, tab, p, gs1, gc1, fc1, k1, kb1, diag)
-        store_depths(F, h1, nd1)
-        dt = time_step(u, V, h1, du1, L, p, wf)
+                exclude_own_deposit(x, V, order, own, p.dx_grid, Ld, qc, wall, S1[S_GB])
+        bed_terms(x, u, V, S1, tab, p, diag)
+        store_depths(F, S1[S_H], S1[S_ND])
+        dt = time_step(u, V, S1[S_H], S1[S_DU], L, p, wf)
         if not dt > 0.0:
             return t, nsteps, NONFINITE, -1, L, dt
         last = t + dt >= t_target
         if last:
             dt = t_target - t
-        drive_and_deposition(x, u, V, h1, dh1, du1, gb1, gs1, gc1, fc1, k1, tab, p, dt, a1, fr, fdv)
+        drive_and_deposition(x, u, V, S1, tab, p, dt, a1, fr, fdv)
         predictor(x, u, V, a1, fdv, dt, p, xt, ut)
         # stage 2 at (x̃, ũ)
-        E = evaluate_into(xt, ut, V, L, qc, wall, xe, ue, Ve, he, lo, hi, h2, nd2, dh2, du2, xs2, E)
+        E = evaluate_into(xt, ut, V, L, qc, wall, W, S2, E)
         if strain:
-            strained_k(xt, V, kp, du1, dt, tab, p, ks)
-            symmetric_pressure_gradient(xt, L, qc, wall, xe, Ve, he, lo, hi, E, ks, ke, dh2, kb2)
+            strained_k(xt, V, kp, S1[S_DU], dt, tab, p, ks)
+            symmetric_pressure_gradient(xt, L, qc, wall, W, E, ks, ke, S2)
         elif p.k_symmetric:
-            particle_k(xt, du2, tab, p, kp)
-            symmetric_pressure_gradient(xt, L, qc, wall, xe, Ve, he, lo, hi, E, kp, ke, dh2, kb2)
+            particle_k(xt, S2[S_DU], tab, p, kp)
+            symmetric_pressure_gradient(xt, L, qc, wall, W, E, kp, ke, S2)
         if bed:
-            deposit_gradient(xt, V, bed_dep, p.dx_grid, Ld, qc, wall, gb2)
+            deposit_gradient(xt, V, bed_dep, p.dx_grid, Ld, qc, wall, S2[S_GB])
             if mine:
-                exclude_own_deposit(xt, V, order, own, p.dx_grid, Ld, qc, wall, gb2)
-        bed_terms(xt, ut, V, h2, dh2, du2, tab, p, gs2, gc2, fc2, k2, kb2, diag)
-        status, i = corrector(x, u, V, a1, dh2, gb2, xs2, gs2, gc2, fc1, fc2, k2, fr, dt, p, xn, un)
+                exclude_own_deposit(xt, V, order, own, p.dx_grid, Ld, qc, wall, S2[S_GB])
+        bed_terms(xt, ut, V, S2, tab, p, diag)
+        status, i = corrector(x, u, V, a1, S1, S2, fr, dt, p, new)
         if status != RUNNING:
             return t, nsteps, status, order[i], L, dt
         if strain:  # k^{n+1}: the Heun mean of the two stages' strain rates
-            stage_mean(du1, du2, ks)
+            stage_mean(S1[S_DU], S2[S_DU], ks)
             strained_k(xn, V, kp, ks, dt, tab, p, F[F_K])
         t_new = t_target if last else t + dt
-        mark_envelopes(env, x, xn, h1, un, V, t_new, p.dx_grid, p.front_threshold)
-        umax = commit(x, F, xn, un, fr, dep, depb, binv, p, order, own)
+        mark_envelopes(env, x, xn, S1[S_H], un, V, t_new, p.dx_grid, p.front_threshold)
+        umax = commit(x, F, new, fr, D, p, order)
         t = t_new
         nsteps += 1
         if umax < p.u_rest:

@@ -23,7 +23,7 @@ from . import analytic as an
 from .config import DAConfig
 from .solver import Physics, simulate
 from .verification_rows import COLUMNS, row as _row
-from .sph import evaluate
+from .sph import S_DH, S_DU, S_H, evaluate
 from .api import run_da
 import tempfile
 from pathlib import Path
@@ -89,10 +89,8 @@ def linear_fields(n: int = 400, spacing: float = 1e-3, L_factor: float = 4.0, q_
     V = spacing * (c0 + c1 * x)
     u = a + b * x
     L = L_factor * spacing
-    xe, ue, Ve, he = (np.empty(2 * n) for _ in range(4))
-    lo, hi = np.empty(n, np.int64), np.empty(n, np.int64)
-    h, nd, dh, du, xs = (np.empty(n) for _ in range(5))
-    evaluate(x, u, V, L, q_c, False, xe, ue, Ve, he, lo, hi, h, nd, dh, du, xs)
+    S = evaluate(x, u, V, L, q_c, False)
+    h, dh, du = S[S_H], S[S_DH], S[S_DU]
     interior = (x > x[0] + 2 * q_c * L) & (x < x[-1] - 2 * q_c * L)
     return x, h, dh, du, interior, c1, b
 
