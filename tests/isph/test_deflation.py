@@ -60,7 +60,7 @@ def test_sweeps_give_the_ssor_inverse_and_its_product_with_a():
     lp, li, lv, up, ui, uv, diag = tri
     r = np.random.default_rng(2).normal(size=n)
     w, y, ay = np.empty(n), np.empty(n), np.empty(n)
-    _sgs_with_product(*tri, 1.0 / diag, r, w, y, ay)
+    _sgs_with_product(tri, 1.0 / diag, r, w, y, ay)
     lower = sp.tril(a, -1).toarray()
     d = np.diag(diag)
     s = (d + lower) @ np.linalg.inv(d) @ (d + lower.T)          # symmetric Gauss-Seidel matrix
@@ -76,7 +76,7 @@ def test_deflated_cg_meets_the_true_residual_test(warm):
     b = rng.normal(size=n)
     x_ref = spla.spsolve(a.tocsc(), b)
     x0 = x_ref + 0.01 * rng.normal(size=n) if warm else np.zeros(n)
-    x, it, info = pcg_ssor_deflated(*tri, b, x0, 1e-10, 0.0, 2000)
+    x, it, info = pcg_ssor_deflated(tri, b, x0, 1e-10, 0.0, 2000)
     assert info == 0 and it > 0
     assert np.linalg.norm(b - a @ x) < 1e-10 * np.linalg.norm(b)
     assert np.allclose(x, x_ref, rtol=1e-6, atol=1e-8 * np.abs(x_ref).max())
@@ -91,8 +91,8 @@ def test_deflation_takes_out_the_growth_of_the_ssor_iterations():
         a, tri = _wide(n_side=side)
         n = a.shape[0]
         b = np.random.default_rng(1).normal(size=n)
-        its[side] = (pcg_ssor_deflated(*tri, b, np.zeros(n), 1e-10, 0.0, 3000)[1],
-                     pcg_dic_split(*tri, b, np.zeros(n), 1e-10, 0.0, 3000, -1.0)[1])
+        its[side] = (pcg_ssor_deflated(tri, b, np.zeros(n), 1e-10, 0.0, 3000)[1],
+                     pcg_dic_split(tri, b, np.zeros(n), 1e-10, 0.0, 3000, -1.0)[1])
     assert its[60][1] > 1.3 * its[30][1]
     assert its[60][0] < 1.2 * its[30][0]
     assert its[60][0] < 0.5 * its[60][1]
@@ -130,26 +130,26 @@ def test_coarse_factor_refuses_a_matrix_that_is_not_positive_definite():
 def test_deflated_cg_edge_cases():
     a, tri = _wide(n_side=10)
     n = a.shape[0]
-    x, it, info = pcg_ssor_deflated(*tri, np.zeros(n), np.ones(n), 1e-8, 0.0, 100)
+    x, it, info = pcg_ssor_deflated(tri, np.zeros(n), np.ones(n), 1e-8, 0.0, 100)
     assert it == 0 and info == 0 and not x.any()
     b = np.ones(n)
     b[3] = np.nan
-    assert pcg_ssor_deflated(*tri, b, np.zeros(n), 1e-8, 0.0, 100)[2] == NONFINITE
+    assert pcg_ssor_deflated(tri, b, np.zeros(n), 1e-8, 0.0, 100)[2] == NONFINITE
     lp, li, lv, up, ui, uv, diag = tri
-    assert pcg_ssor_deflated(lp, li, -lv, up, ui, -uv, -diag, np.ones(n), np.zeros(n), 1e-8, 0.0, 100)[2] == BREAKDOWN
+    assert pcg_ssor_deflated((lp, li, -lv, up, ui, -uv, -diag), np.ones(n), np.zeros(n), 1e-8, 0.0, 100)[2] == BREAKDOWN
     x_ref = spla.spsolve(a.tocsc(), np.ones(n))
-    assert pcg_ssor_deflated(*tri, np.ones(n), x_ref, 1e-8, 0.0, 100)[1] == 0     # already converged
-    assert pcg_ssor_deflated(*tri, np.ones(n), np.zeros(n), 1e-15, 0.0, 2)[1:] == (2, 2)
+    assert pcg_ssor_deflated(tri, np.ones(n), x_ref, 1e-8, 0.0, 100)[1] == 0     # already converged
+    assert pcg_ssor_deflated(tri, np.ones(n), np.zeros(n), 1e-15, 0.0, 2)[1:] == (2, 2)
 
 
 def test_below_the_threshold_it_is_the_ssor_cg_bit_for_bit():
     a, tri = _wide(n_side=20)
     n = a.shape[0]
     b = np.random.default_rng(3).normal(size=n)
-    below = pcg_ssor_deflated(*tri, b, np.zeros(n), 1e-10, 0.0, 500, n + 1)
-    ssor = pcg_dic_split(*tri, b, np.zeros(n), 1e-10, 0.0, 500, -1.0)
+    below = pcg_ssor_deflated(tri, b, np.zeros(n), 1e-10, 0.0, 500, n + 1)
+    ssor = pcg_dic_split(tri, b, np.zeros(n), 1e-10, 0.0, 500, -1.0)
     assert np.array_equal(below[0], ssor[0]) and below[1:] == ssor[1:]
-    at = pcg_ssor_deflated(*tri, b, np.zeros(n), 1e-10, 0.0, 500, n)      # from the threshold on: deflated
+    at = pcg_ssor_deflated(tri, b, np.zeros(n), 1e-10, 0.0, 500, n)      # from the threshold on: deflated
     assert at[2] == 0 and at[1] < ssor[1]
 
 
@@ -161,8 +161,8 @@ def test_too_many_aggregates_falls_back_to_the_ssor_cg():
     z = np.zeros(n + 1, np.int64)
     tri = (z, np.empty(0, np.uint32), np.empty(0), z.copy(), np.empty(0, np.uint32), np.empty(0), diag)
     b = np.random.default_rng(0).normal(size=n)
-    xd = pcg_ssor_deflated(*tri, b, np.zeros(n), 1e-10, 0.0, 100)
-    xs = pcg_dic_split(*tri, b, np.zeros(n), 1e-10, 0.0, 100, -1.0)
+    xd = pcg_ssor_deflated(tri, b, np.zeros(n), 1e-10, 0.0, 100)
+    xs = pcg_dic_split(tri, b, np.zeros(n), 1e-10, 0.0, 100, -1.0)
     assert np.array_equal(xd[0], xs[0]) and xd[1:] == xs[1:]
 
 

@@ -44,9 +44,9 @@ def test_planted_indefinite_matrix_is_a_reported_breakdown_not_an_exception():
                  pcg_dic(indptr, indices, data, b, x0, 1e-8, 0.0, 1000, 0.0)[2]):
         assert info == BREAKDOWN  # p·Ap <= 0 met inside the iteration
     assert pcg_dic(indptr, indices, data, b, x0, 1e-8, 0.0, 1000, 0.97)[2] == -1  # MIC pivot breakdown
-    r = pcg_jacobi_pair(indptr, indices, data, data[indptr[:-1]] + 10.0, b, x0, b, x0, 1e-8, 0.0, 1000)
+    r = pcg_jacobi_pair((indptr, indices, data), data[indptr[:-1]] + 10.0, b, x0, b, x0, 1e-8, 0.0, 1000)
     assert r[2] == BREAKDOWN and r[5] == 0  # the u side broke down, the (definite) v side converged
-    r = pcg_dic_pair(indptr, indices, data, data[indptr[:-1]] + 10.0, b, x0, b, x0, 1e-8, 0.0, 1000, 0.0)
+    r = pcg_dic_pair((indptr, indices, data), data[indptr[:-1]] + 10.0, b, x0, b, x0, 1e-8, 0.0, 1000, 0.0)
     assert r[2] == BREAKDOWN and r[5] == 0
 
 
@@ -74,8 +74,8 @@ def test_non_finite_rhs_is_reported_at_once(bad):
     assert pcg_jacobi(indptr, indices, data, b, x0, 1e-8, 0.0, 1000)[1:] == (0, NONFINITE)
     assert pcg_dic(indptr, indices, data, b, x0, 1e-8, 0.0, 1000, 0.97)[1:] == (0, NONFINITE)
     ok = np.ones(n)
-    for pair in (pcg_jacobi_pair(indptr, indices, data, data[indptr[:-1]], b, x0, ok, x0, 1e-8, 0.0, 1000),
-                 pcg_dic_pair(indptr, indices, data, data[indptr[:-1]], b, x0, ok, x0, 1e-8, 0.0, 1000, 0.97)):
+    for pair in (pcg_jacobi_pair((indptr, indices, data), data[indptr[:-1]], b, x0, ok, x0, 1e-8, 0.0, 1000),
+                 pcg_dic_pair((indptr, indices, data), data[indptr[:-1]], b, x0, ok, x0, 1e-8, 0.0, 1000, 0.97)):
         assert pair[2] == NONFINITE and pair[5] == 0 and np.all(np.isfinite(pair[3]))
 
 

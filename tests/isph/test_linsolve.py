@@ -105,14 +105,14 @@ def test_pair_equals_two_single_solves_bitwise():
     data_v = data.copy()
     data_v[indptr[:-1]] = diag_v
     bu, bv = rng.standard_normal(n), 0.01 * rng.standard_normal(n)
-    xu, itu, infou, xv, itv, infov = pcg_jacobi_pair(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000)
+    xu, itu, infou, xv, itv, infov = pcg_jacobi_pair((indptr, indices, data), diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000)
     xu1, itu1, _ = _scipy_cg(indptr, indices, data, bu, bu)
     xv1, itv1, _ = _scipy_cg(indptr, indices, data_v, bv, bv)
     assert infou == 0 and infov == 0
     assert (itu, itv) == (itu1, itv1) and itu != itv  # the two recurrences stop on their own tests
     assert np.array_equal(xu, xu1) and np.array_equal(xv, xv1)
     # one side with a zero right-hand side, the other not converging in the allowed iterations
-    xu, itu, infou, xv, itv, infov = pcg_jacobi_pair(indptr, indices, data, diag_v, np.zeros(n), bu, bv, bv,
+    xu, itu, infou, xv, itv, infov = pcg_jacobi_pair((indptr, indices, data), diag_v, np.zeros(n), bu, bv, bv,
                                                      1e-8, 0.0, 3)
     xv3, itv3, infov3 = _scipy_cg(indptr, indices, data_v, bv, bv, maxiter=3)
     assert (itu, infou) == (0, 0) and np.array_equal(xu, np.zeros(n))
@@ -127,7 +127,7 @@ def test_pair_rejects_a_matrix_without_the_diagonal_first():
     data[[i0, i0 + 1]] = data[[i0 + 1, i0]]
     b = np.ones(n)
     with pytest.raises(ValueError, match="diagonal must be the first entry"):
-        pcg_jacobi_pair(indptr, indices, data, np.ones(n), b, b, b, b, 1e-8, 0.0, 10)
+        pcg_jacobi_pair((indptr, indices, data), np.ones(n), b, b, b, b, 1e-8, 0.0, 10)
 
 
 # ---- DIC-preconditioned CG (cg_dic): a different iteration, judged on the true residual ----------
@@ -246,26 +246,26 @@ def test_dic_pair_equals_two_single_dic_solves_bitwise():
     data_v = data.copy()
     data_v[indptr[:-1]] = diag_v
     bu, bv = rng.standard_normal(n), 0.01 * rng.standard_normal(n)
-    xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000)
+    xu, itu, infou, xv, itv, infov = pcg_dic_pair((indptr, indices, data), diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000)
     xu1, itu1, infou1 = pcg_dic(indptr, indices, data, bu, bu, 1e-8, 0.0, 1000)
     xv1, itv1, infov1 = pcg_dic(indptr, indices, data_v, bv, bv, 1e-8, 0.0, 1000)
     assert (infou, infov, infou1, infov1) == (0, 0, 0, 0)
     assert (itu, itv) == (itu1, itv1) and itu != itv and itu > 3
     assert np.array_equal(xu, xu1) and np.array_equal(xv, xv1)
-    xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000,
+    xu, itu, infou, xv, itv, infov = pcg_dic_pair((indptr, indices, data), diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000,
                                                   0.97)
     xu2, itu2, _ = pcg_dic(indptr, indices, data, bu, bu, 1e-8, 0.0, 1000, 0.97)
     xv2, itv2, _ = pcg_dic(indptr, indices, data_v, bv, bv, 1e-8, 0.0, 1000, 0.97)
     assert (itu, itv) == (itu2, itv2) and np.array_equal(xu, xu2) and np.array_equal(xv, xv2)
     # zero right-hand side on one side; maxiter on the other; breakdown (negative diagonal) on v
-    xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, np.zeros(n), bu, bv, bv,
+    xu, itu, infou, xv, itv, infov = pcg_dic_pair((indptr, indices, data), diag_v, np.zeros(n), bu, bv, bv,
                                                   1e-8, 0.0, 2)
     xv2, itv2, infov2 = pcg_dic(indptr, indices, data_v, bv, bv, 1e-8, 0.0, 2)
     assert (itu, infou) == (0, 0) and np.array_equal(xu, np.zeros(n))
     assert (itv, infov) == (2, 2) == (itv2, infov2) and np.array_equal(xv, xv2)
     bad_v = diag_v.copy()
     bad_v[3] = -1.0
-    xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000)
+    xu, itu, infou, xv, itv, infov = pcg_dic_pair((indptr, indices, data), bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000)
     assert infov == -1 and np.array_equal(xv, bv)
     assert (itu, infou) == (itu1, 0) and np.array_equal(xu, xu1)
 
@@ -278,14 +278,14 @@ def test_dic_two_threads_equals_the_pair_bitwise():
     rng = np.random.default_rng(12)
     diag_v = data[indptr[:-1]] + 0.3 * rng.random(n)
     bu, bv = rng.standard_normal(n), 0.01 * rng.standard_normal(n)
-    a = pcg_dic_pair(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.97)
+    a = pcg_dic_pair((indptr, indices, data), diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.97)
     b = pcg_dic_two(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.97)
     assert a[1] > 3 and a[2] == a[5] == 0
     for p, q in zip(a, b):
         assert np.array_equal(p, q)
     bad_v = diag_v.copy()
     bad_v[3] = -1.0  # breakdown on the v side only
-    a = pcg_dic_pair(indptr, indices, data, bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.0)
+    a = pcg_dic_pair((indptr, indices, data), bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.0)
     b = pcg_dic_two(indptr, indices, data, bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.0)
     assert a[5] == b[5] == -1 and a[2] == b[2] == 0 and np.array_equal(a[0], b[0])
 

@@ -42,7 +42,7 @@ def _system(stab=0.3, seed=5):
     unknown[unk] = np.arange(unk.size)
     p = np.where(known, np.random.default_rng(seed).normal(size=n), 0.0)
     b = np.random.default_rng(seed + 1).normal(size=n)
-    args = (n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b)
+    args = (po.PPESystem(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size), p, b)
     return args, full[np.ix_(unk, unk)], b[unk] - full[np.ix_(unk, np.flatnonzero(known))] @ p[known]
 
 
@@ -50,7 +50,7 @@ def _system(stab=0.3, seed=5):
 def test_matrix_free_operator_is_the_dense_product_and_its_rhs_the_assembled_one(stab):
     args, dense, rhs_ref = _system(stab)
     op, rhs = po.matrix_free_ppe(*args)
-    nf = args[5]
+    nf = args[0].nf
     m = rhs.size
     scale = np.abs(dense).max()
     assert np.allclose(rhs, rhs_ref, atol=1e-10 * np.abs(rhs_ref).max())
@@ -114,7 +114,7 @@ def test_fast_ppe_solvers_agree_with_superlu_within_the_cg_tolerance():
             "free": pcg_two_level_free(op, rhs_f, x0, rtol, 0.0, 1000),
             "free_two_stage": pcg_two_level_free(op, rhs_f, x0, rtol, 0.0, 1000, 3),
             "ssor_csr": pcg_dic(indptr, indices, data, rhs, x0, rtol, 0.0, 1000, -1.0),
-            "ssor_triangles": pcg_dic_split(*tri, rhs_t, x0, rtol, 0.0, 1000, -1.0)}
+            "ssor_triangles": pcg_dic_split(tri, rhs_t, x0, rtol, 0.0, 1000, -1.0)}
     for name, (x, it, info) in sols.items():
         assert info == 0 and it > 0, name
         # the stopping test holds for the true residual of the assembled matrix
@@ -124,7 +124,7 @@ def test_fast_ppe_solvers_agree_with_superlu_within_the_cg_tolerance():
     x, it, info = pcg_two_level_free(op, rhs_f, exact, 1e-8, 0.0, 1000)
     assert info == 0 and it <= 1
     # SSOR on the triangles is the CSR path, split, bit for bit
-    assert np.array_equal(sols["ssor_csr"][0], pcg_dic_split(*split_triangles(indptr, indices, data), rhs, x0, rtol,
+    assert np.array_equal(sols["ssor_csr"][0], pcg_dic_split(split_triangles(indptr, indices, data), rhs, x0, rtol,
                                                              0.0, 1000, -1.0)[0])
 
 
@@ -138,10 +138,10 @@ def test_fast_ppe_solvers_report_breakdown_and_zero_rhs():
     bad[0] = np.nan
     assert pcg_two_level_free(op, bad, x0, 1e-8, 0.0, 100)[2] < 0
     tri, rhs_t = po.assemble_adjoint_triangles(*args)
-    assert pcg_dic_split(*tri, bad, x0, 1e-8, 0.0, 100, -1.0)[2] < 0
+    assert pcg_dic_split(tri, bad, x0, 1e-8, 0.0, 100, -1.0)[2] < 0
     neg = list(tri)
     neg[6] = -neg[6]                                  # a negative diagonal: the SSOR pivots refuse it
-    assert pcg_dic_split(*neg, rhs_t, x0, 1e-8, 0.0, 100, -1.0)[2] == -1
+    assert pcg_dic_split(tuple(neg), rhs_t, x0, 1e-8, 0.0, 100, -1.0)[2] == -1
 
 
 def test_config_errors_name_the_key_and_the_allowed_values():

@@ -207,8 +207,8 @@ def test_adjoint_pair_matrix_equals_the_dense_product_plus_the_compact_laplacian
     unknown[unk] = np.arange(unk.size)
     p = np.where(known, np.random.default_rng(5).normal(size=n), 0.0)
     b = np.random.default_rng(6).normal(size=n)
-    indptr, indices, data, rhs = po.assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown,
-                                                         unk.size, p, b)
+    system = po.PPESystem(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size)
+    indptr, indices, data, rhs = po.assemble_adjoint_ppe(system, p, b)
     dense = np.zeros((unk.size, unk.size))
     for r in range(unk.size):
         assert indices[indptr[r]] == r                # diagonal first
@@ -219,8 +219,7 @@ def test_adjoint_pair_matrix_equals_the_dense_product_plus_the_compact_laplacian
                        atol=1e-10 * np.abs(rhs).max())
     # the node blocks of the threads (one per numba thread) do not change a bit of it
     for nblock in (2, 3, 7):
-        got = po._assemble_blocks.serial(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b,
-                                         nblock)
+        got = po._assemble_blocks.serial(system, p, b, nblock)
         for a, e in zip(got, (indptr, indices, data, rhs)):
             assert a.dtype == e.dtype and np.array_equal(a, e), nblock
 

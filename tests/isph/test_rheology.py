@@ -52,7 +52,7 @@ def test_regularised_kernel_without_regularisation_matches_the_paper_kernel():
     grad = _grad(n, rng)
     p = rng.uniform(-10.0, 2000.0, n)
     e1, g1 = mu_i_viscosity(grad, p, 7e-4, 2500.0, MU_S, MU_2, I0, 1e-3, 5e3)
-    e2, g2 = regularised_viscosity(grad, p, 7e-4, 2500.0, MU_S, MU_2, 0.0, I0, 0.0, 1.9, 1.0, 1e-3, 5e3)
+    e2, g2 = regularised_viscosity(grad, p, 7e-4, 2500.0, (MU_S, MU_2, 0.0, I0, 0.0, 1.9, 1.0), (1e-3, 5e3))
     assert np.array_equal(g1, g2)
     assert np.allclose(e1, e2, rtol=1e-12, atol=0.0)
 
@@ -64,7 +64,7 @@ def test_regularised_kernel_against_numpy():
     p = rng.uniform(1.0, 2000.0, n)
     lo, _ = ill_posed_bounds(MU_S, MU_2, 0.0, I0)
     a = regularisation_constant(lo, MU_S, MU_2, 0.0, I0, 1.9)
-    eta, gd = regularised_viscosity(grad, p, 7e-4, 2500.0, MU_S, MU_2, 0.0, I0, lo, 1.9, a, 1e-3, 5e3)
+    eta, gd = regularised_viscosity(grad, p, 7e-4, 2500.0, (MU_S, MU_2, 0.0, I0, lo, 1.9, a), (1e-3, 5e3))
     dxy = 0.5 * (grad[:, 1] + grad[:, 2])
     gref = np.sqrt(2.0 * (grad[:, 0] ** 2 + grad[:, 3] ** 2 + 2.0 * dxy ** 2))
     i = gref * 7e-4 / np.sqrt(p / 2500.0)

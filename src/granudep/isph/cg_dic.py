@@ -188,8 +188,10 @@ def _upper_solve(up, ui, uv, dinv, s, out):
 
 
 @njit(cache=True)
-def _eisenstat_product(lp, li, lv, up, ui, uv, dinv, kd, p, t, w, q):
-    """q = Â p = t + W⁻¹(p + K t), t = W⁻ᵀ p (w: work array for W⁻¹(p + K t))."""
+def _eisenstat_product(T, dinv, kd, p, t, w, q):
+    """q = Â p = t + W⁻¹(p + K t), t = W⁻ᵀ p (w: work array for W⁻¹(p + K t)); T = the strict
+    triangles (lp, li, lv, up, ui, uv)."""
+    lp, li, lv, up, ui, uv = T
     _upper_solve(up, ui, uv, dinv, p, t)
     for i in range(p.size):
         acc = p[i] + kd[i] * t[i]
@@ -217,14 +219,16 @@ def pcg_dic(indptr, indices, data, b, x0, rtol, atol, maxiter, mic=0.0):
         return b.copy(), 0, 0
     if not math.isfinite(_dot(b, b)):
         return x0.copy(), 0, NONFINITE
-    lp, li, lv, up, ui, uv, diag = split_triangles(indptr, indices, data)
-    return pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, mic)
+    return pcg_dic_split(split_triangles(indptr, indices, data), b, x0, rtol, atol, maxiter, mic)
 
 
 @njit(cache=True)
-def pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, mic=0.0):
-    """:func:`pcg_dic` on a matrix given as its two triangles and diagonal (:func:`split_triangles`'
-    layout; e.g. the adjoint-pair PPE assembled that way, :func:`ppe_operator.assemble_adjoint_triangles`)."""
+def pcg_dic_split(tri, b, x0, rtol, atol, maxiter, mic=0.0):
+    """:func:`pcg_dic` on a matrix given as its two triangles and diagonal, tri = (lp, li, lv, up, ui,
+    uv, diag) (:func:`split_triangles`' layout; e.g. the adjoint-pair PPE assembled that way,
+    :func:`ppe_operator.assemble_adjoint_triangles`)."""
+    lp, li, lv, up, ui, uv, diag = tri
+    T = (lp, li, lv, up, ui, uv)
     n = b.size
     thresh = stop_threshold(math.sqrt(_dot(b, b)), rtol, atol)
     x = x0.copy()
@@ -275,7 +279,7 @@ def pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, mic=
                 p[i] = p[i] * beta + z[i]
         else:
             p[:] = z
-        _eisenstat_product(lp, li, lv, up, ui, uv, dinv, kd, p, t, s, q)
+        _eisenstat_product(T, dinv, kd, p, t, s, q)
         pq = _dot(p, q)
         if not pq > 0.0:
             break  # zero/negative curvature (or NaN): A singular or indefinite
@@ -302,9 +306,13 @@ def pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, mic=
 
 
 @njit(cache=True)
-def _pair_eisenstat_product(lp, li, lv, up, ui, uv, dinv_u, dinv_v, kd_u, kd_v, pu, pv, tu, tv, wu, wv, qu, qv):
+def _pair_eisenstat_product(T, dinv, kd, p, t, w, q):
     """:func:`_eisenstat_product` for the u and v systems in one pair of sweeps (shared
-    off-diagonal entries; per side the same operations in the same order)."""
+    off-diagonal entries; per side the same operations in the same order): row 0 of each (2, n)
+    array is u's, row 1 v's."""
+    lp, li, lv, up, ui, uv = T
+    dinv_u, dinv_v, kd_u, kd_v = dinv[0], dinv[1], kd[0], kd[1]
+    pu, pv, tu, tv, wu, wv, qu, qv = p[0], p[1], t[0], t[1], w[0], w[1], q[0], q[1]
     n = pu.size
     for i in range(n - 1, -1, -1):
         au = pu[i]
@@ -331,11 +339,12 @@ def _pair_eisenstat_product(lp, li, lv, up, ui, uv, dinv_u, dinv_v, kd_u, kd_v, 
 
 
 @njit(cache=True, nogil=True)
-def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
-    """:func:`pcg_dic` on the u and v viscous systems in lock-step (A_v = A_u with diagonal
-    ``diag_v``; diagonal first in each row): each side gives the same result as its own
-    :func:`pcg_dic` call, bit for bit, with one traversal of the off-diagonal entries per
-    iteration for both. Returns (x_u, iterations_u, info_u, x_v, iterations_v, info_v)."""
+def pcg_dic_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
+    """:func:`pcg_dic` on the u and v viscous systems in lock-step (A = (indptr, indices, data): A_u
+    in CSR, diagonal first in each row; A_v = A_u with diagonal ``diag_v``): each side gives the same
+    result as its own :func:`pcg_dic` call, bit for bit, with one traversal of the off-diagonal
+    entries per iteration for both. Returns (x_u, iterations_u, info_u, x_v, iterations_v, info_v)."""
+    indptr, indices, data = A
     n = bu.size
     for i in range(n):
         if indices[indptr[i]] != i:
@@ -426,8 +435,7 @@ def pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, ma
                     p[s, i] = p[s, i] * beta + z[i]
             else:
                 p[s, :] = z
-        _pair_eisenstat_product(lp, li, lv, up, ui, uv, dinv[0], dinv[1], kd[0], kd[1], p[0], p[1], t[0], t[1],
-                                w[0], w[1], q[0], q[1])
+        _pair_eisenstat_product((lp, li, lv, up, ui, uv), dinv, kd, p, t, w, q)
         for s in range(2):
             if not run[s]:
                 continue

@@ -124,9 +124,11 @@ def _deflate_start(lc, lct, agg, app, api, apv, x, r, rc, yc):
 
 
 @njit(cache=True)
-def _sgs_with_product(lp, li, lv, up, ui, uv, diag, dinv, r, w, y, ay):
+def _sgs_with_product(tri, dinv, r, w, y, ay):
     """y = S⁻¹ r (symmetric Gauss-Seidel: w = (D + L)⁻¹ r, y = (D + U)⁻¹ D w) and ay = A y = L y + D w,
-    L y scattered from the backward sweep's rows (one read of each triangle)."""
+    L y scattered from the backward sweep's rows (one read of each triangle); tri = (lp, li, lv, up,
+    ui, uv, diag)."""
+    lp, li, lv, up, ui, uv, diag = tri
     n = r.size
     for i in range(n):
         acc = r[i]
@@ -146,16 +148,17 @@ def _sgs_with_product(lp, li, lv, up, ui, uv, diag, dinv, r, w, y, ay):
 
 
 @njit(cache=True)
-def pcg_ssor_deflated(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, min_unknowns=0):
-    """Solve A x = b (A SPD given as its triangles and diagonal, :func:`linsolve.split_triangles`'
-    layout) by SSOR-CG with the aggregation deflation space (module docstring), warm-started from
+def pcg_ssor_deflated(tri, b, x0, rtol, atol, maxiter, min_unknowns=0):
+    """Solve A x = b (A SPD given as its triangles and diagonal, tri = (lp, li, lv, up, ui, uv, diag),
+    :func:`linsolve.split_triangles`' layout) by SSOR-CG with the aggregation deflation space (module docstring), warm-started from
     x0. Returns (x, iterations, info) as :func:`linsolve.pcg_dic_split`: info 0 converged,
     ``maxiter`` not, ``BREAKDOWN`` for a coarse matrix that is not positive definite, a non-positive
     diagonal or curvature, ``NONFINITE`` for a right-hand side with NaN/inf. Below ``min_unknowns``
     unknowns (``numerics.deflation_min_unknowns``: there the set-up costs more than the iterations
     it saves) and above ``COARSE_MAX`` aggregates it is :func:`linsolve.pcg_dic_split`'s SSOR-CG."""
     if b.size < min_unknowns:
-        return pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, -1.0)
+        return pcg_dic_split(tri, b, x0, rtol, atol, maxiter, -1.0)
+    lp, li, lv, up, ui, uv, diag = tri
     n = b.size
     nb = math.sqrt(_dot(b, b))
     if nb == 0.0:
@@ -167,7 +170,7 @@ def pcg_ssor_deflated(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, 
             return x0.copy(), 0, BREAKDOWN
     agg, nc = aggregate_rows(lp, li, lv, up, ui, uv)
     if nc > COARSE_MAX:
-        return pcg_dic_split(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, -1.0)
+        return pcg_dic_split(tri, b, x0, rtol, atol, maxiter, -1.0)
     app, api, apv, ac = coarse_operators(lp, li, lv, up, ui, uv, diag, agg, nc)
     lc, lct, ok = coarse_factor(ac)
     if not ok:
@@ -190,7 +193,7 @@ def pcg_ssor_deflated(lp, li, lv, up, ui, uv, diag, b, x0, rtol, atol, maxiter, 
     rho_prev = 1.0
     first = True
     for it in range(maxiter):
-        _sgs_with_product(lp, li, lv, up, ui, uv, diag, dinv, r, w, y, ay)
+        _sgs_with_product(tri, dinv, r, w, y, ay)
         rc[:] = 0.0                              # e = A_c⁻¹ Pᵀ A y
         for i in range(n):
             rc[agg[i]] += ay[i]

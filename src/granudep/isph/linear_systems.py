@@ -100,7 +100,7 @@ class LinearSystems:
         rtol = self.owner.cfg.numerics.solver_rtol
         try:
             if len(op) == 7:
-                sol, it, info = pcg_ssor_deflated(*op, rhs, guess, rtol, 0.0, 1000,
+                sol, it, info = pcg_ssor_deflated(op, rhs, guess, rtol, 0.0, 1000,
                                                   self.owner.cfg.numerics.deflation_min_unknowns)
             else:
                 sol, it, info = pcg_two_level_free(op, rhs, guess, rtol, 0.0, 1000)
@@ -184,10 +184,10 @@ class LinearSystems:
         rtol = self.owner.cfg.numerics.solver_rtol
         try:
             if dic:
-                xu, itu, infou, xv, itv, infov = pcg_dic_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol,
+                xu, itu, infou, xv, itv, infov = pcg_dic_pair((indptr, indices, data), diag_v, bu, xu0, bv, xv0, rtol,
                                                               0.0, 1000, self.owner.cfg.numerics.ic_modification)
             else:
-                xu, itu, infou, xv, itv, infov = pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0,
+                xu, itu, infou, xv, itv, infov = pcg_jacobi_pair((indptr, indices, data), diag_v, bu, xu0, bv, xv0,
                                                                  rtol, 0.0, 1000)
         except (ZeroDivisionError, FloatingPointError) as exc:
             xu, itu, infou, xv, itv, infov = xu0, 0, BREAKDOWN, xv0, 0, BREAKDOWN

@@ -250,10 +250,12 @@ def _pair_matvec(indptr, indices, data, diag_v, pu, pv, qu, qv, do_u, do_v):
 
 
 @njit(cache=True)
-def pcg_jacobi_pair(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
-    """Two Jacobi-CG solves, A_u x_u = b_u and A_v x_v = b_v, in lock-step (see module doc).
+def pcg_jacobi_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
+    """Two Jacobi-CG solves, A_u x_u = b_u and A_v x_v = b_v, in lock-step (see module doc);
+    A = (indptr, indices, data): A_u in CSR, diagonal first in each row, A_v = A_u with ``diag_v``.
 
     Returns (x_u, iterations_u, info_u, x_v, iterations_v, info_v)."""
+    indptr, indices, data = A
     n = bu.size
     for i in range(n):
         if indices[indptr[i]] != i:

@@ -10,13 +10,35 @@ from __future__ import annotations
 import numpy as np
 from numba import get_num_threads, njit, prange
 
+from typing import NamedTuple
+
 from .parallel import prange_kernel
 
 
+class PPESystem(NamedTuple):
+    """What every form of the adjoint-pair PPE is built from (:mod:`.projection` makes it): the
+    divergence D as COO entries (node row, particle column, x and y coefficients) over the n nodes
+    (nf particles, then wall nodes), the edges of the stabilising Laplacian L_c (ei, ej, weight ea),
+    its weight ε, and the unknowns' numbering (``unknown[node]``, −1 for a known node)."""
+    n: int
+    rows: np.ndarray
+    cols: np.ndarray
+    cx: np.ndarray
+    cy: np.ndarray
+    nf: int
+    ei: np.ndarray
+    ej: np.ndarray
+    ea: np.ndarray
+    stab: float
+    unknown: np.ndarray
+    n_unknown: int
+
+
 @njit(cache=True, nogil=True)
-def ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+def ppe_rhs(system, p, b):
     """The right-hand side of the PPE on the unknowns, b_U − (1 − ε) D_U (D_Kᵀ p_K) − ε (L_c p_K)_U,
     for the matrix-free operator and the triangles (each row's D_U sum in D's COO order)."""
+    n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown = system
     wd = 1.0 - stab
     rhs = np.empty(n_unknown)
     for a in range(n):
@@ -116,11 +138,13 @@ def _row_bounds(a0, a1, rptr, r_col, cptr, lptr, unknown):
 
 
 @njit(cache=True)
-def _product_rows(a0, a1, g, wd, stab, unknown, p, b, slot, acc, lst, indices, data, rowlen, rhs):
+def _product_rows(a0, a1, g, wd, stab, unknown, p, b, work, out):
     """Gustavson's row-by-row product for the unknown rows among nodes a0..a1−1, written from 0 into
-    ``indices``/``data`` (diagonal first, then the columns in the order they are met); ``slot``
-    (−1 on entry and on return) maps a node to its place in the row's accumulator ``acc``.
-    Returns the number of entries written."""
+    out = (indices, data, rowlen, rhs) (diagonal first, then the columns in the order they are met);
+    work = (slot, acc, lst): ``slot`` (−1 on entry and on return) maps a node to its place in the
+    row's accumulator ``acc``, ``lst`` lists the row's nodes. Returns the number of entries written."""
+    slot, acc, lst = work
+    indices, data, rowlen, rhs = out
     rptr, r_col, r_x, r_y, cptr, c_row, c_x, c_y, lptr, l_col, l_val = g
     pos = 0
     for a in range(a0, a1):
@@ -178,22 +202,22 @@ def _product_rows(a0, a1, g, wd, stab, unknown, p, b, slot, acc, lst, indices, d
     return pos
 
 
-def assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+def assemble_adjoint_ppe(system, p, b):
     """CSR (diagonal first) of ((1 − ε) D Dᵀ + ε L_c) restricted to the unknown nodes and its right-hand side
     b_U − A_UK p_K (Gustavson's row-by-row product, :func:`_product_rows`).
 
-    ``rows, cols, cx, cy``: D in COO (:func:`divergence_entries`); ``ei, ej, ea``: the edges of L_c;
-    ``unknown[node]``: the unknown's index or −1 (known, value ``p[node]``), the unknowns numbered in
+    ``system`` (:class:`PPESystem`): D in COO (:func:`divergence_entries`), the edges of L_c and
+    ``unknown[node]``, the unknown's index or −1 (known, value ``p[node]``), the unknowns numbered in
     node order. The nodes are split into one contiguous block per numba thread (``prange``); each row
     is computed alone, in the same order whatever the blocks, so the result does not depend on the
     thread count (bit for bit)."""
-    return _assemble_blocks(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b,
-                            max(1, min(get_num_threads(), n)))
+    return _assemble_blocks(system, p, b, max(1, min(get_num_threads(), system.n)))
 
 
 @prange_kernel
-def _assemble_blocks(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b, nblock):
+def _assemble_blocks(system, p, b, nblock):
     """:func:`assemble_adjoint_ppe` over ``nblock`` contiguous blocks of nodes, one per ``prange`` iteration."""
+    n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown = system
     expect = 0
     for a in range(n):
         if unknown[a] >= 0:
@@ -218,8 +242,8 @@ def _assemble_blocks(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unk
         slot = np.full(n, -1, np.int32)
         acc = np.empty(largest)
         lst = np.empty(largest, np.int32)
-        counts[c] = _product_rows(edges[c], edges[c + 1], g, wd, stab, unknown, p, b, slot, acc, lst, ind, dat,
-                                  rowlen, rhs)
+        counts[c] = _product_rows(edges[c], edges[c + 1], g, wd, stab, unknown, p, b, (slot, acc, lst),
+                                  (ind, dat, rowlen, rhs))
         block_indices[c] = ind
         block_data[c] = dat
     indptr = np.zeros(n_unknown + 1, np.int64)
@@ -307,7 +331,7 @@ def wall_normal_acceleration(pairs, nf, vol, lmat, walls, p, rho, planes):
 
 
 @njit(cache=True, nogil=True)
-def matrix_free_operator(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown):
+def matrix_free_operator(system):
     """The operator ((1 − ε) D Dᵀ + ε L_c) restricted to the unknown nodes, unassembled (the matrix
     of :func:`assemble_adjoint_ppe`; its right-hand side is :func:`ppe_rhs`'s).
 
@@ -315,6 +339,7 @@ def matrix_free_operator(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n
     unknown row (columns: particles) and by particle (rows: unknown indices), both CSR, wd = 1 − ε;
     ε L_c restricted to the unknowns by row with its diagonal first (``lval`` holds ε a_e; the
     diagonal sums the edges to known nodes too). See :func:`cg_two_level.free_matvec`."""
+    n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown = system
     wd = 1.0 - stab
     # D_U by unknown row and by particle
     rptr = np.zeros(n_unknown + 1, np.int64)
@@ -386,22 +411,22 @@ def matrix_free_operator(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n
 
 
 @njit(cache=True)
-def matrix_free_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+def matrix_free_ppe(system, p, b):
     """(op, rhs): :func:`matrix_free_operator` and :func:`ppe_rhs` (the same system as
     :func:`assemble_adjoint_ppe`)."""
-    return (matrix_free_operator(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown),
-            ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b))
+    return (matrix_free_operator(system),
+            ppe_rhs(system, p, b))
 
 
 @njit(cache=True)
-def assemble_adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b):
+def assemble_adjoint_triangles(system, p, b):
     """(triangles, rhs): :func:`adjoint_triangles` and :func:`ppe_rhs`."""
-    return (adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown),
-            ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown, p, b))
+    return (adjoint_triangles(system),
+            ppe_rhs(system, p, b))
 
 
 @njit(cache=True, nogil=True)
-def adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown):
+def adjoint_triangles(system):
     """The matrix of :func:`assemble_adjoint_ppe` as its strict lower and upper triangles and its
     diagonal, in :func:`cg_dic.split_triangles`' layout (uint64 row pointers, uint32 columns, the
     lower rows by ascending and the upper rows by descending column); for the SSOR-preconditioned
@@ -413,7 +438,8 @@ def adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_un
     only moves forward as a grows),
     plus its L_c entries b > a; the lower triangle is its transpose. Half the multiply-adds of the
     row-by-row product and no CSR to split. Returns (lp, li, lv, up, ui, uv, diag)."""
-    op = matrix_free_operator(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown)
+    n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, n_unknown = system
+    op = matrix_free_operator(system)
     wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval = op
     m = n_unknown
     # each column by ascending node (insertion sort: the columns come nearly sorted)

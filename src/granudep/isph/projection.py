@@ -27,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .ppe_operator import (adjoint_triangles, apply_divergence, apply_gradient, assemble_adjoint_ppe,
+from .ppe_operator import (PPESystem, adjoint_triangles, apply_divergence, apply_gradient, assemble_adjoint_ppe,
                            matrix_free_operator, ppe_rhs)
 
 
@@ -214,7 +214,7 @@ def adjoint_pair_geometry(pairs, nf, nw, vol, fs, p_fs, eps2, lap_norm, stab, wa
         unknown, unk = _numbering(active)
         if unk.size:
             rows, cols, cx, cy = entries
-            tri = adjoint_triangles(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size)
+            tri = adjoint_triangles(PPESystem(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size))
     return PairGeometry(ei, ej, ea, wetted, active, p, tri)
 
 
@@ -272,6 +272,7 @@ def adjoint_pair_projection(pairs, nf, nw, vol, lmat, walls, fs, p_fs, us, vs, c
         if unk.size == 0:
             break
         p[unk] = 0.0
+        system = PPESystem(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size)
         if solve_free is not None:
             if k == 0 and triangles:
                 op = geometry.triangles      # built before u* was known (it does not depend on it)
@@ -279,13 +280,11 @@ def adjoint_pair_projection(pairs, nf, nw, vol, lmat, walls, fs, p_fs, us, vs, c
                 # the triangles again for a changed active set, or the matrix-free operator
                 # (numerics.ppe_operator): the same operator applied as D_U (D_Uᵀ x) + ε L_c x
                 build = adjoint_triangles if triangles else matrix_free_operator
-                op = build(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size)
-            rhs = ppe_rhs(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown, unk.size, p, b)
-            p[unk] = solve_free(op, rhs, guess[unk], _csr_builder(n, rows, cols, cx, cy, nf, ei, ej, ea, stab,
-                                                                   unknown, unk.size, p.copy(), b))
+                op = build(system)
+            rhs = ppe_rhs(system, p, b)
+            p[unk] = solve_free(op, rhs, guess[unk], _csr_builder(system, p.copy(), b))
         else:
-            indptr, indices, data, rhs = assemble_adjoint_ppe(n, rows, cols, cx, cy, nf, ei, ej, ea, stab, unknown,
-                                                              unk.size, p, b)
+            indptr, indices, data, rhs = assemble_adjoint_ppe(system, p, b)
             p[unk] = solve(indptr, indices, data, rhs, guess[unk])
         pull = unk[(unk >= nf) & (p[unk] < 0.0)] if release else np.zeros(0, np.int64)
         released += int(pull.size)

@@ -79,9 +79,12 @@ def friction(inertial, mu_s, mu_2, mu_inf, i0, i_n1, alpha, a_minus):
 
 
 @njit(cache=True)
-def regularised_viscosity(grad, p, d, rho_s, mu_s, mu_2, mu_inf, i0, i_n1, alpha, a_minus, eta_min, eta_max):
-    """η = μ(I) p/|γ̇| with μ(I) from :func:`friction`, capped to [eta_min, eta_max]; returns η, |γ̇|
-    (|γ̇| from :func:`granudep.isph.operators.shear_rate`, as in ``mu_i_viscosity``)."""
+def regularised_viscosity(grad, p, d, rho_s, law, bounds):
+    """η = μ(I) p/|γ̇| with μ(I) from :func:`friction`, capped to bounds = (eta_min, eta_max); returns
+    η, |γ̇| (|γ̇| from :func:`granudep.isph.operators.shear_rate`, as in ``mu_i_viscosity``).
+    law = (mu_s, mu_2, mu_inf, i0, i_n1, alpha, a_minus): :func:`friction`'s constants."""
+    mu_s, mu_2, mu_inf, i0, i_n1, alpha, a_minus = law
+    eta_min, eta_max = bounds
     n = p.size
     eta = np.empty(n)
     gdot = np.empty(n)

@@ -289,8 +289,8 @@ class IsphSolver(ParticleState):
             self.eta, self.gdot = viscous.mu_i_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2, m.I0_standard,
                                                          rh.eta_min, rh.eta_max)
         else:
-            self.eta, self.gdot = regularised_viscosity(grad, self.p_rheo, m.d, m.rho_s, m.mu_s, m.mu_2,
-                                                        rh.mu_inf, m.I0_standard, *self.reg, rh.eta_min, rh.eta_max)
+            law = (m.mu_s, m.mu_2, rh.mu_inf, m.I0_standard, *self.reg)
+            self.eta, self.gdot = regularised_viscosity(grad, self.p_rheo, m.d, m.rho_s, law, (rh.eta_min, rh.eta_max))
 
     @property
     def incremental(self) -> bool:
