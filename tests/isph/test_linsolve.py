@@ -279,14 +279,14 @@ def test_dic_two_threads_equals_the_pair_bitwise():
     diag_v = data[indptr[:-1]] + 0.3 * rng.random(n)
     bu, bv = rng.standard_normal(n), 0.01 * rng.standard_normal(n)
     a = pcg_dic_pair((indptr, indices, data), diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.97)
-    b = pcg_dic_two(indptr, indices, data, diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.97)
+    b = pcg_dic_two((indptr, indices, data), diag_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.97)
     assert a[1] > 3 and a[2] == a[5] == 0
     for p, q in zip(a, b):
         assert np.array_equal(p, q)
     bad_v = diag_v.copy()
     bad_v[3] = -1.0  # breakdown on the v side only
     a = pcg_dic_pair((indptr, indices, data), bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.0)
-    b = pcg_dic_two(indptr, indices, data, bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.0)
+    b = pcg_dic_two((indptr, indices, data), bad_v, bu, bu, bv, bv, 1e-8, 0.0, 1000, 0.0)
     assert a[5] == b[5] == -1 and a[2] == b[2] == 0 and np.array_equal(a[0], b[0])
 
 

@@ -473,11 +473,12 @@ def pcg_dic_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
 
 
 @prange_kernel
-def pcg_dic_two(indptr, indices, data, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
-    """The u and v viscous systems of :func:`pcg_dic_pair` as two independent :func:`pcg_dic` solves,
-    one per thread (prange over the two systems): the same results bit for bit as the pair (each
-    side of the pair is its own pcg_dic, see its doc) on any number of threads, in about half the
-    time on two. Returns (x_u, iterations_u, info_u, x_v, iterations_v, info_v)."""
+def pcg_dic_two(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
+    """The u and v viscous systems of :func:`pcg_dic_pair` (same A, diag_v) as two independent
+    :func:`pcg_dic` solves, one per thread (prange over the two systems): the same results bit for
+    bit as the pair (each side of the pair is its own pcg_dic, see its doc) on any number of
+    threads, in about half the time on two. Returns (x_u, iterations_u, info_u, x_v, iterations_v, info_v)."""
+    indptr, indices, data = A
     n = bu.size
     for i in range(n):
         if indices[indptr[i]] != i:

@@ -137,7 +137,7 @@ def pcg_two_level(indptr, indices, data, b, x0, rtol, atol, maxiter):
     agg, lc, lct, ok = _two_level_setup(indptr, indices, data)
     if not ok:
         return x, 0, BREAKDOWN
-    return _pcg_loop(indptr, indices, data, x, r, dinv, thresh, maxiter, lc, lct, agg, False)
+    return _pcg_loop((indptr, indices, data), x, r, dinv, thresh, maxiter, (lc, lct, agg), False)
 
 
 @njit(cache=True)

@@ -171,18 +171,20 @@ def pcg_jacobi(indptr, indices, data, b, x0, rtol, atol, maxiter):
     if status != 0:
         return x, 0, status
     no_coarse = np.empty((0, 0))
-    return _pcg_loop(indptr, indices, data, x, r, dinv, thresh, maxiter, no_coarse, no_coarse,
-                     np.empty(0, np.int64), True)
+    return _pcg_loop((indptr, indices, data), x, r, dinv, thresh, maxiter,
+                     (no_coarse, no_coarse, np.empty(0, np.int64)), True)
 
 
 @prange_kernel
-def _pcg_loop(indptr, indices, data, x, r, dinv, thresh, maxiter, lc, lct, agg, blas_dot):
-    """The CG iteration from the initial state (x, r): preconditioner z = D⁻¹ r, plus the coarse
-    correction P A_c⁻¹ Pᵀ r when ``lc`` (the Cholesky factor of A_c, :func:`pcg_two_level`) is not
-    empty; dot products by ``np.dot`` (``blas_dot``: scipy's iterates bit for bit) or :func:`_dot`.
+def _pcg_loop(A, x, r, dinv, thresh, maxiter, coarse, blas_dot):
+    """The CG iteration on A = (indptr, indices, data) from the initial state (x, r): preconditioner
+    z = D⁻¹ r, plus the coarse correction P A_c⁻¹ Pᵀ r when coarse = (lc, lct, agg) has a non-empty
+    ``lc`` (the Cholesky factor of A_c, :func:`pcg_two_level`); dot products by ``np.dot`` (``blas_dot``: scipy's iterates bit for bit) or :func:`_dot`.
     The product A p runs over the rows in parallel (``prange``), each row summed as
     :func:`csr_matvec` does, so the iterates do not depend on the thread count.
     Returns (x, iterations, info) as :func:`pcg_jacobi`."""
+    indptr, indices, data = A
+    lc, lct, agg = coarse
     n = x.size
     nc = lc.shape[0]
     z = np.empty(n)
