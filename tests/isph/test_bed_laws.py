@@ -44,7 +44,7 @@ def test_mu_w_i_drag_matches_numpy():
     u, v, planes, a_n = _reaction_case()
     n, dt, eps, rho, dx, ell = u.size, 1e-4, 1e-4, 1550.0, 0.004, D
     du, dv = np.ones(n), np.ones(n)
-    walls.mu_w_i_drag_from_reaction(n, u, v, a_n, planes, MU_S, MU_2, I0, D, RHO_S, rho, dx, ell, dt, eps, du, dv)
+    walls.mu_w_i_drag_from_reaction(n, (u, v), a_n, planes, (MU_S, MU_2, I0, D, RHO_S), (rho, dx, ell, dt, eps), (du, dv))
     ref_u, ref_v = np.ones(n), np.ones(n)
     for q, (nx, ny, _) in enumerate(planes):
         an = a_n[:, q]
@@ -67,7 +67,7 @@ def test_stress_limited_drag_is_the_smaller_of_no_slip_and_coulomb():
     kns = rng.uniform(0, 50, (n, 2))
     p = rng.uniform(10, 200, n)
     du, dv = np.zeros(n), np.zeros(n)
-    walls.stress_limited_drag(n, u, v, kns, p, a_n, planes, mu, dx, dt, rho, eps, du, dv)
+    walls.stress_limited_drag(n, (u, v), kns, p, a_n, planes, (mu, dx, dt, rho, eps), (du, dv))
     ref_u, ref_v = np.zeros(n), np.zeros(n)
     for q, (nx, ny, _) in enumerate(planes):
         an = a_n[:, q]

@@ -77,7 +77,7 @@ def test_velocity_gradient_and_divergence_are_exact_for_a_linear_field_up_to_the
     u = 0.3 + a[0, 0] * x + a[0, 1] * y
     v = -0.2 + a[1, 0] * x + a[1, 1] * y
     empty = np.zeros(0)
-    grad = operators.velocity_gradient(c["pairs"], nf, VOL, x, y, u, v, lmat,
+    grad = operators.velocity_gradient(c["pairs"], nf, VOL, (x, y), (u, v), lmat,
                                        WallSurface(empty, empty, empty), 0, 0.0, DX)
     renorm = ~np.all(np.isclose(lmat, [1.0, 0.0, 0.0, 1.0]), axis=1)
     assert renorm.sum() > 0.6 * nf
@@ -87,7 +87,7 @@ def test_velocity_gradient_and_divergence_are_exact_for_a_linear_field_up_to_the
     # and each agrees with the plain-NumPy gradient on any field
     f = np.random.default_rng(5).normal(size=x.size)
     ref = naive.granular_gradient(x, y, nf, H, VOL, f, lmat)
-    grad_f = operators.velocity_gradient(c["pairs"], nf, VOL, x, y, f, f, lmat,
+    grad_f = operators.velocity_gradient(c["pairs"], nf, VOL, (x, y), (f, f), lmat,
                                          WallSurface(empty, empty, empty), 0, 0.0, DX)
     np.testing.assert_allclose(grad_f[:, :2], ref, rtol=1e-10, atol=1e-10 * np.abs(ref).max())
 
@@ -99,8 +99,8 @@ def test_pressure_gradient_is_exact_for_a_linear_pressure_without_walls():
     lmat = _geometry(c)[4]
     p = 50.0 + 3.0e3 * x - 9.81e3 * y
     empty = np.zeros(0)
-    gpx, gpy = operators.pressure_gradient(c["pairs"], nf, VOL, p, np.zeros(nf),
-                                           np.zeros(nf), lmat, WallSurface(empty, empty, empty), 1e-4, 1000.0, np.zeros(nf, np.bool_))
+    gpx, gpy = operators.pressure_gradient(c["pairs"], nf, VOL, p, (np.zeros(nf),
+                                           np.zeros(nf)), lmat, WallSurface(empty, empty, empty), 1e-4, 1000.0, np.zeros(nf, np.bool_))
     renorm = ~np.all(np.isclose(lmat, [1.0, 0.0, 0.0, 1.0]), axis=1)
     np.testing.assert_allclose(gpx[renorm], 3.0e3, rtol=1e-9)
     np.testing.assert_allclose(gpy[renorm], -9.81e3, rtol=1e-9)

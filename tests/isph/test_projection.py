@@ -30,7 +30,7 @@ def test_adjoint_divergence_is_minus_the_transpose_of_the_gradient():
     for k in range(nf):
         e = np.zeros(nf)
         e[k] = 1.0
-        a, b = operators.pressure_gradient(pairs, nf, vol, e, zeros, zeros, lmat, WallSurface(empty, empty, empty), 1e-3,
+        a, b = operators.pressure_gradient(pairs, nf, vol, e, (zeros, zeros), lmat, WallSurface(empty, empty, empty), 1e-3,
                                            1000.0, detached)
         gxm[:, k], gym[:, k] = a, b
     rng = np.random.default_rng(1)

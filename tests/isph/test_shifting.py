@@ -57,8 +57,8 @@ def test_shift_below_the_surface_loses_its_normal_part():
     layer = np.round((0.02 - dx / 2 - s.y[:s.nf]) / dx).astype(int)
     dt = 1e-4
     alpha = shifting.surface_band(pairs, s.nf, fs, s.h, 2.0 * dx)
-    _, sy_band = shifting.shifting(s.nf, gcx, gcy, s.u, s.v, alpha, s.h, dt, 2.0, dx, ncx, ncy)
-    _, sy_surf = shifting.shifting(s.nf, gcx, gcy, s.u, s.v, fs.astype(float), s.h, dt, 2.0, dx, ncx, ncy)
+    _, sy_band = shifting.shifting(s.nf, (gcx, gcy), (s.u, s.v), alpha, s.h, dt, 2.0, dx, (ncx, ncy))
+    _, sy_surf = shifting.shifting(s.nf, (gcx, gcy), (s.u, s.v), fs.astype(float), s.h, dt, 2.0, dx, (ncx, ncy))
     below = layer == 1
     assert np.all(sy_surf[below] > 1e-3 * dx)          # pushed up into the surface layer
     assert np.abs(sy_band[below]).max() < 1e-9 * dx

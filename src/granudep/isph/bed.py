@@ -47,9 +47,8 @@ class FrictionWall(NoWallTerm):
                 clen = walls.contact_length(nb, nf, s.x, s.y, geo.contact, s.planes, s.dx)
             else:
                 clen = np.full(geo.contact.shape, s.dx)
-            walls.coulomb_wall_drag(nf, s.u, s.v, s.p_rheo, geo.contact, geo.col, s.planes,
-                                    s.mu_wall, s.gx, s.gy, rho, s.dx, dt, s.u_eps, diag_u, diag_v,
-                                    clen)
+            walls.coulomb_wall_drag(nf, (s.u, s.v), s.p_rheo, geo.contact, geo.col, s.planes, (s.gx, s.gy),
+                                    (s.mu_wall, rho, s.dx, dt, s.u_eps), (diag_u, diag_v), clen)
         data[indptr[:-1]] = diag_u
         wall_du = diag_u - wall_du
         wall_dv = diag_v - wall_dv
@@ -64,15 +63,14 @@ class FrictionWall(NoWallTerm):
                                              s.u_eps, diag_u, diag_v)
         elif s.slip == walls.SLIP_MU_W_I:
             m = c.material
-            walls.mu_w_i_drag_from_reaction(nf, s.u, s.v, s.wall_an, s.planes, m.mu_s, m.mu_2, m.I0_standard, m.d,
-                                            m.rho_s, s.rho, s.dx, c.wall_shear_length, dt, s.u_eps,
-                                            diag_u, diag_v)
+            walls.mu_w_i_drag_from_reaction(nf, (s.u, s.v), s.wall_an, s.planes,
+                                            (m.mu_s, m.mu_2, m.I0_standard, m.d, m.rho_s),
+                                            (s.rho, s.dx, c.wall_shear_length, dt, s.u_eps), (diag_u, diag_v))
         else:
-            kns = walls.viscous_wall_drag(nb, nf, s.x, s.y, s.eta, s.wall_surface, s.planes,
-                                          walls.SLIP_NO, 0.0, s.dx, s.rho, s.vol, s.eps2, s.lap_norm,
-                                          s.wall_ns)
-            walls.stress_limited_drag(nf, s.u, s.v, kns, s.p_rheo, s.wall_an, s.planes, s.mu_wall,
-                                      s.dx, dt, s.rho, s.u_eps, diag_u, diag_v)
+            kns = walls.viscous_wall_drag(nb, nf, (s.x, s.y), s.eta, s.wall_surface, s.planes, (walls.SLIP_NO, 0.0),
+                                          (s.dx, s.rho, s.vol, s.eps2, s.lap_norm), s.wall_ns)
+            walls.stress_limited_drag(nf, (s.u, s.v), kns, s.p_rheo, s.wall_an, s.planes,
+                                      (s.mu_wall, s.dx, dt, s.rho, s.u_eps), (diag_u, diag_v))
 
 
 class ViscousWall(NoWallTerm):
@@ -82,9 +80,9 @@ class ViscousWall(NoWallTerm):
     def predictor_terms(self, s, nb, geo, dt: float, data, indptr, diag_v):
         c, nf, rho = s.cfg, s.nf, s.rho
         # the viscous wall term's share of the diagonal (already in the matrix), for the booking
-        kns = walls.viscous_wall_drag(nb, nf, s.x, s.y, s.eta, s.wall_surface, s.planes,
-                                      s.slip, c.wall.slip_length, s.dx, rho, s.vol, s.eps2,
-                                      s.lap_norm, s.wall_norm)
+        kns = walls.viscous_wall_drag(nb, nf, (s.x, s.y), s.eta, s.wall_surface, s.planes,
+                                      (s.slip, c.wall.slip_length), (s.dx, rho, s.vol, s.eps2, s.lap_norm),
+                                      s.wall_norm)
         scale = None
         if (c.wall.bed_stress == "bed" and c.rheology.model == "mu_i" and s.reaction_friction
                 and s.wall_an is not None and s.wall_an.shape[0] == nf):

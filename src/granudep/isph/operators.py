@@ -180,9 +180,12 @@ def lmat_pressure(lmat, fs, mxx, myy):
 
 
 @prange_kernel
-def velocity_gradient(pairs, nf, vol, x, y, u, v, lmat, walls, slip, slip_length, dx):
-    """Renormalised ∇u (rows: du/dx, du/dy, dv/dx, dv/dy); wall neighbours carry the extrapolated
-    wall velocity (normal component = u_i's, tangential (1 − βφ) u_i,t)."""
+def velocity_gradient(pairs, nf, vol, pos, vel, lmat, walls, slip, slip_length, dx):
+    """Renormalised ∇u (rows: du/dx, du/dy, dv/dx, dv/dy) at the positions pos = (x, y) from the
+    velocities vel = (u, v); wall neighbours carry the extrapolated wall velocity (normal
+    component = u_i's, tangential (1 − βφ) u_i,t)."""
+    x, y = pos
+    u, v = vel
     start, nbr, rx, ry, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.gw
     wnx, wny, wc = walls.nx, walls.ny, walls.c
     grad = np.zeros((nf, 4))
@@ -268,12 +271,14 @@ def divergence(pairs, nf, vol, u, v, lmat):
 
 
 @prange_kernel
-def pressure_gradient(pairs, nf, vol, p, us, vs, lmat, walls, dt, rho, detached):
-    """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure.
+def pressure_gradient(pairs, nf, vol, p, vel, lmat, walls, dt, rho, detached):
+    """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure
+    (which reads the predicted velocities vel = (u*, v*)).
 
     ``detached`` particles (first layer over a wall but farther than 0.75 dx from it) ignore the
     wall: with the renormalisation the mirror pressure would otherwise hold them at any height
     within the kernel support (2h), hovering without contact."""
+    us, vs = vel
     start, nbr, rx, ry, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.gw
     wnx, wny = walls.nx, walls.ny
     gpx = np.zeros(nf)

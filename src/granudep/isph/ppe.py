@@ -10,15 +10,20 @@ from .parallel import prange_kernel
 
 
 @prange_kernel
-def assemble_ppe(pairs, nf, vol, unknown, n_unknown, p_dir, div, us, vs, conc, c0, relax, walls, dt, rho, eps2,
-                 a_full, lap_norm):
+def assemble_ppe(pairs, nf, vol, unknowns, p_dir, div, vel, density, walls, consts):
     """PPE Σ_j a_ij (p_i − p_j) = −(ρ/Δt) ∇·u* − γ ρ/Δt² min(1 − C_i/C0, 0) over the unknown
     (non-free-surface) particles; a_ij = 2 V F_ij (Cummins & Rudman 1999 Laplacian). Free-surface
     neighbours have their Dirichlet value ``p_dir``; wall neighbours use the mirror pressure (Neumann), which moves to the RHS.
     Kernel completion: where the support is truncated (next to the free surface) the missing
     neighbours are taken at p = 0, i.e. diag += max(a_full − Σ_j a_ij, 0) with a_full the
     full-lattice sum (``a_full`` <= 0 switches this off).
-    Symmetric positive definite whenever every cluster touches a free surface."""
+    Symmetric positive definite whenever every cluster touches a free surface.
+    unknowns = (unknown[particle], their number); vel = (u*, v*); density = (C, C0, γ);
+    consts = (Δt, ρ, ε², a_full, Laplacian norm)."""
+    unknown, n_unknown = unknowns
+    us, vs = vel
+    conc, c0, relax = density
+    dt, rho, eps2, a_full, lap_norm = consts
     start, nbr, rx, ry, rr, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.rr, pairs.gw
     wnx, wny = walls.nx, walls.ny
     indptr = np.zeros(n_unknown + 1, np.int64)

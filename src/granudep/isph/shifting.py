@@ -39,10 +39,14 @@ def surface_band(pairs, nf, fs, h, r_ref):
 
 
 @prange_kernel
-def shifting(nf, gcx, gcy, u, v, alpha, h, dt, coeff, dx, ncx, ncy):
-    """Fickian particle shifting δr = −A h |u| Δt ∇C (Skillen et al. 2013; Lind et al. 2012);
-    the fraction ``alpha`` of the part normal to the free surface is removed (1 on free-surface
-    particles: they keep only the tangential part); |δr| <= min(0.1 dx, |u| Δt/2). Zero at rest."""
+def shifting(nf, gc, vel, alpha, h, dt, coeff, dx, nc):
+    """Fickian particle shifting δr = −A h |u| Δt ∇C (Skillen et al. 2013; Lind et al. 2012), with
+    gc = (∂C/∂x, ∂C/∂y) and vel = (u, v); the fraction ``alpha`` of the part normal to the free
+    surface (normal nc = (n_x, n_y)) is removed (1 on free-surface particles: they keep only the
+    tangential part); |δr| <= min(0.1 dx, |u| Δt/2). Zero at rest."""
+    gcx, gcy = gc
+    u, v = vel
+    ncx, ncy = nc
     sx = np.zeros(nf)
     sy = np.zeros(nf)
     if coeff <= 0.0:

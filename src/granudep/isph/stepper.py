@@ -279,7 +279,7 @@ class IsphSolver(ParticleState):
         self.p_rheo = np.maximum(p_seen, self.p_floor)
         if rh.model != "mu_i" and self.slip != walls.SLIP_NAVIER_OVERWRITE:
             return
-        grad = operators.velocity_gradient(nb, nf, self.vol, self.x, self.y, self.u, self.v, geo.lmat, self.wall_surface,
+        grad = operators.velocity_gradient(nb, nf, self.vol, (self.x, self.y), (self.u, self.v), geo.lmat, self.wall_surface,
                                            walls.gradient_slip_code(self.slip), c.wall.slip_length, self.dx)
         self.grad = grad  # uⁿ's gradient: the authors' slip (navier_overwrite) reads it after the projection
         if rh.model != "mu_i":
@@ -320,10 +320,10 @@ class IsphSolver(ParticleState):
         side; books the viscous and wall-friction dissipation. Returns (u*, v*)."""
         c = self.cfg
         nf, rho = self.nf, self.rho
-        indptr, indices, data, diag_v = viscous.assemble_viscous(nb, nf, self.vol, self.x, self.y,
-                                                                 self.eta, self.gdot, self.wall_surface,
-                                                                 walls.viscous_slip_code(self.slip), c.wall.slip_length, self.dx, dt, rho, self.eps2,
-                                                                 self.mean, self.lap_norm, self.wall_norm)
+        indptr, indices, data, diag_v = viscous.assemble_viscous(
+            nb, nf, self.vol, (self.x, self.y), (self.eta, self.gdot), self.wall_surface,
+            (walls.viscous_slip_code(self.slip), c.wall.slip_length), (self.dx, dt, rho, self.eps2, self.lap_norm),
+            self.mean, self.wall_norm)
         diag_v, wall_du, wall_dv = self.bed.predictor_terms(self, nb, geo, dt, data, indptr, diag_v)
         # the velocity the viscous step starts from: uⁿ, less the old pressure impulse (incremental)
         u0, v0 = self.u, self.v
@@ -399,8 +399,8 @@ class IsphSolver(ParticleState):
         ncx, ncy = operators.smoothed_gradient(nb, nf, h, geo.gcx, geo.gcy)
         alpha = (shifting.surface_band(nb, nf, self.fs, h, 2.0 * self.dx)
                  if c.numerics.shifting_surface == "band" else self.fs.astype(np.float64))
-        sx, sy = shifting.shifting(nf, geo.gcx, geo.gcy, self.u, self.v, alpha, h, dt, c.numerics.shifting, self.dx,
-                                   ncx, ncy)
+        sx, sy = shifting.shifting(nf, (geo.gcx, geo.gcy), (self.u, self.v), alpha, h, dt, c.numerics.shifting,
+                                   self.dx, (ncx, ncy))
         eb.projection += pressure_work(self.m, u_old, v_old, us, vs, self.u, self.v)
         overwrite = self.slip == walls.SLIP_NAVIER_OVERWRITE and self.grad is not None
         if overwrite:
@@ -448,12 +448,12 @@ class IsphSolver(ParticleState):
         # of a free-surface particle: p_fs = ρ g cosθ dx/2 (bed-normal hydrostatics), or 0
         p_new = np.where(self.fs, self.p_fs, 0.0)
         if n_unknown:
-            pi, pj, pd, rhs = ppe.assemble_ppe(nb, nf, vol, unknown, n_unknown, p_new, div,
-                                               us, vs, conc, self.c0, self.density_relaxation(dt), self.wall_surface, dt,
-                                               rho, self.eps2, self.a_full, self.lap_norm)
+            pi, pj, pd, rhs = ppe.assemble_ppe(nb, nf, vol, (unknown, n_unknown), p_new, div, (us, vs),
+                                               (conc, self.c0, self.density_relaxation(dt)), self.wall_surface,
+                                               (dt, rho, self.eps2, self.a_full, self.lap_norm))
             p_new[interior] = self.linear.solve_ppe(pi, pj, pd, rhs, self.p[interior])
         self.p = p_new
-        gpx, gpy = operators.pressure_gradient(nb, nf, vol, self.p, us, vs, lmat_p, self.wall_surface,
+        gpx, gpy = operators.pressure_gradient(nb, nf, vol, self.p, (us, vs), lmat_p, self.wall_surface,
                                                dt, rho, detached)
         self.u = us - dt / rho * gpx
         self.v = vs - dt / rho * gpy

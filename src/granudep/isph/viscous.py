@@ -71,10 +71,10 @@ def mu_i_viscosity(grad, p, d, rho_s, mu_s, mu_2, i0, eta_min, eta_max):
 
 
 @prange_kernel
-def assemble_viscous(pairs, nf, vol, x, y, eta, gdot, walls, slip, slip_length, dx, dt, rho, eps2, mean, lap_norm,
-                     wall_ns):
+def assemble_viscous(pairs, nf, vol, pos, visc, walls, law, consts, mean, wall_ns):
     """Implicit viscous matrices A = I − Δt/ρ ∇·(η∇·) (Morris Laplacian, pair viscosity
-    :func:`pair_viscosity`, ``rheology.pair_mean``: stress-weighted by default) as CSR.
+    :func:`pair_viscosity`, ``rheology.pair_mean``: stress-weighted by default) as CSR; pos = (x, y),
+    visc = (η, |γ̇|), law = (slip code, slip length) of the wall, consts = (dx, Δt, ρ, ε², Laplacian norm).
 
     Row i: (1 + Δt/ρ Σ_j c_ij + wall_i) u_i − Δt/ρ Σ_j c_ij u_j,
     c_ij = 2 η̄_ij V F_ij, F_ij = −r dW/dr/(r² + ε²) ≥ 0, η̄ = 2 η_i η_j/(η_i + η_j). Symmetric.
@@ -82,6 +82,10 @@ def assemble_viscous(pairs, nf, vol, x, y, eta, gdot, walls, slip, slip_length, 
     wall_i = Δt/ρ Σ_w 2 η_i V F_iw β φ t_a², t = wall tangent, a = x (u matrix) or y (v matrix).
     Returns indptr, indices, data (diagonal first in each row, u matrix) and diag_v (v matrix).
     """
+    x, y = pos
+    eta, gdot = visc
+    slip, slip_length = law
+    dx, dt, rho, eps2, lap_norm = consts
     start, nbr, rr, gw = pairs.start, pairs.nbr, pairs.rr, pairs.gw
     wnx, wny, wc = walls.nx, walls.ny, walls.c
     indptr = np.zeros(nf + 1, np.int64)

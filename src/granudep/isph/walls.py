@@ -218,9 +218,10 @@ def contact_length(pairs, nf, x, y, contact, planes, dx):
 
 
 @prange_kernel
-def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, dx, dt, u_eps, diag_u, diag_v,
-                      length):
-    """Coulomb wall friction as an implicit drag on the first particle layer (slip = coulomb).
+def coulomb_wall_drag(nf, vel, p, contact, col, planes, g, consts, diag, length):
+    """Coulomb wall friction as an implicit drag on the first particle layer (slip = coulomb);
+    vel = (u, v), g = (g_x, g_y), consts = (μ_B, ρ, dx, Δt, u_eps), diag = (diag_u, diag_v) the
+    viscous diagonals it adds to.
 
     For a particle in contact with wall plane (n, c) (:func:`wall_contact`), the traction μ_B p_w
     on its bed area dx, with the contact pressure p_w = max(p_i + g_n ρ dx/2, g_n ρ h_col) (PPE pressure
@@ -232,6 +233,10 @@ def coulomb_wall_drag(nf, u, v, p, contact, col, planes, mu_wall, gx, gy, rho, d
     k = μ_B p_w l/(ρ dx² max(|u_t|, u_eps)), added implicitly to the diagonal of the tangential
     component. It sticks (static friction up to μ_B p_w) when |u_t| < u_eps.
     """
+    u, v = vel
+    gx, gy = g
+    mu_wall, rho, dx, dt, u_eps = consts
+    diag_u, diag_v = diag
     for i in prange(nf):
         for q in range(planes.shape[0]):
             if not contact[i, q] < np.inf:
@@ -316,14 +321,18 @@ def wall_friction_mu_i(iw, mu_s, mu_2, i0):
 
 
 @prange_kernel
-def mu_w_i_drag_from_reaction(nf, u, v, a_n, planes, mu_s, mu_2, i0, d, rho_s, rho, dx, shear_length, dt, u_eps,
-                              diag_u, diag_v):
-    """Rate-dependent wall friction μ_w(I_w) (``wall.slip: mu_w_i``): as
+def mu_w_i_drag_from_reaction(nf, vel, a_n, planes, law, consts, diag):
+    """Rate-dependent wall friction μ_w(I_w) (``wall.slip: mu_w_i``; vel = (u, v), law = (μ_s, μ_2,
+    I0, d, ρ_s), consts = (ρ, dx, shear length, Δt, u_eps), diag = (diag_u, diag_v)): as
     :func:`coulomb_drag_from_reaction` with the coefficient μ_w(I_w) of :func:`wall_friction_mu_i` in
     place of tan φ_B. The normal stress p_w = ρ a_n dx is the walls' reaction a_n (per unit mass)
     carried on a bed length dx by the particle's volume dx²; I_w from the particle's tangential speed
     at the start of the step (lagged: μ_w explicit, the drag implicit). Dissipative: the drag
     coefficient is ≥ 0. At rest I_w → 0 and μ_w → μ_s: the static limit is the bulk's."""
+    u, v = vel
+    mu_s, mu_2, i0, d, rho_s = law
+    rho, dx, shear_length, dt, u_eps = consts
+    diag_u, diag_v = diag
     for i in prange(nf):
         for q in range(planes.shape[0]):
             an = a_n[i, q]
@@ -339,12 +348,16 @@ def mu_w_i_drag_from_reaction(nf, u, v, a_n, planes, mu_s, mu_2, i0, d, rho_s, r
 
 
 @prange_kernel
-def viscous_wall_drag(pairs, nf, x, y, eta, walls, planes, slip, slip_length, dx, rho, vol, eps2, lap_norm, wall_ns):
-    """Per particle and wall plane, the drag coefficient k (1/s) of the viscous wall term of
+def viscous_wall_drag(pairs, nf, pos, eta, walls, planes, law, consts, wall_ns):
+    """Per particle and wall plane (positions pos = (x, y); law = (slip code, slip length);
+    consts = (dx, ρ, V, ε², Laplacian norm)), the drag coefficient k (1/s) of the viscous wall term of
     :func:`viscous.assemble_viscous` (its diagonal gets Δt k t_a² on the tangential component):
     k = Σ_w 2 η_i V F_iw β / (ρ wall_ns) over the wall particles w of that plane, β of
     :func:`wall_beta` for ``slip`` (no_slip or navier). Used to book the no-slip/Navier wall's share
     of the dissipation and by :func:`stress_limited_drag`."""
+    x, y = pos
+    slip, slip_length = law
+    dx, rho, vol, eps2, lap_norm = consts
     start, nbr, rr, gw = pairs.start, pairs.nbr, pairs.rr, pairs.gw
     wnx, wny, wc = walls.nx, walls.ny, walls.c
     npl = planes.shape[0]
@@ -370,8 +383,9 @@ def viscous_wall_drag(pairs, nf, x, y, eta, walls, planes, slip, slip_length, dx
 
 
 @prange_kernel
-def stress_limited_drag(nf, u, v, kns, p_rheo, a_n, planes, mu_wall, dx, dt, rho, u_eps, diag_u, diag_v):
-    """Stress-limited slip (``wall.slip: stress_limited``; our reading of the paper's Section 4.1
+def stress_limited_drag(nf, vel, kns, p_rheo, a_n, planes, consts, diag):
+    """Stress-limited slip (``wall.slip: stress_limited``; vel = (u, v), consts = (μ_B, dx, Δt, ρ,
+    u_eps), diag = (diag_u, diag_v); our reading of the paper's Section 4.1
     "slip velocity ... calculated based on the stress field"): the bed holds the first layer with the
     no-slip viscous wall stress η ∂u/∂n (drag coefficient ``kns`` per plane, the no-slip wall term
     of :func:`viscous_wall_drag`) as long as that stress stays below the Coulomb limit μ_B p_w;
@@ -384,6 +398,9 @@ def stress_limited_drag(nf, u, v, kns, p_rheo, a_n, planes, mu_wall, dx, dt, rho
     p_w = ρ a_n dx the walls' normal stress (p_i: the pressure the rheology saw). With η_i alone a
     sheet one particle thick (p_i = ρ g cosθ dx/2, the half-layer floor) got half the basal friction
     it needs (μ/2 < tan 22°) and slid on: at dx = 8 mm T22-A70 sent 163 particles 4 m down the bed."""
+    u, v = vel
+    mu_wall, dx, dt, rho, u_eps = consts
+    diag_u, diag_v = diag
     for i in prange(nf):
         for q in range(planes.shape[0]):
             an = a_n[i, q]
