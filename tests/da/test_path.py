@@ -197,15 +197,15 @@ def test_cli_on_a_path(tmp_path):
 
 
 def test_path_front_takes_the_farthest_main_run():
-    from granudep.da.path_solver import path_front
+    from granudep.front import main_run_front
     edges = np.arange(101) * 1.0
     depth = np.zeros(100)
     depth[5:15] = 3.0      # left in the release zone (the deepest)
     depth[40:60] = 1.0     # the main deposit, separated by a gap
     depth[80] = 0.2        # a detached bit (< 1 %)
-    assert path_front(edges, depth, 0.1, np.ones(100)) == 60.0
+    assert main_run_front(edges, depth, 0.1, np.ones(100)) == 60.0
     depth[40:60] = 0.001   # below threshold: the release deposit is the front
-    assert path_front(edges, depth, 0.1, np.ones(100)) == 15.0
+    assert main_run_front(edges, depth, 0.1, np.ones(100)) == 15.0
 
 
 def test_ab_by_release_zone_or_local_slope(tmp_path):

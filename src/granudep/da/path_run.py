@@ -33,7 +33,7 @@ import pandas as pd
 
 FRONT_DEFINITION = ("down-slope edge of the farthest down-slope contiguous run of grid cells whose total depth "
                     "h + h_D (SPH depth eq 20 on the grid / width, plus deposit) is >= front_depth_threshold and "
-                    "which holds >= 1 % of the material above threshold (granudep.da.path_solver.path_front)")
+                    "which holds >= 1 % of the material above threshold (granudep.front.main_run_front with the channel width)")
 ARRIVAL_DEFINITION = "first time a particle at least front_depth_threshold deep passed the cell"
 
 

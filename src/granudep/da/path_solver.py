@@ -42,11 +42,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..front import MAIN_RUN_FRACTION, main_run_front
 from .driver import DARecord, Track, run
 from .path import N_TABLE, T_A, T_B, T_COS, T_DWIDTH, T_KACT, T_KAPPA, T_KPASS, T_SIN, T_WIDTH
-from .solver import custom_state, grid_spacing, step_params
-from .sph import F_K, F_ND, F_V, F_V0, N_FIELDS
+from .solver import custom_state, grid_spacing, released_state, step_params
 from ..cases import momentum_scale
 
 # time_step 'relative': |u| Δt <= CFL · GEOMETRY_STEP · σ (σ the path's smoothing length)
@@ -122,21 +120,9 @@ def path_params(cfg, setup: PathSetup, phys, centripetal: bool):
         geometry_step=GEOMETRY_STEP * setup.bed.sigma if math.isfinite(setup.bed.sigma) else 1e300)
 
 
-def path_front(edges, depth, thr, width, fraction: float = MAIN_RUN_FRACTION) -> float:
-    """Front on a path: ``front.main_run_front`` (the farthest down-slope contiguous run holding at
-    least ``fraction`` of the material above threshold), with the channel width."""
-    return main_run_front(edges, depth, thr, width, fraction)
-
-
 def initial_path_state(setup: PathSetup):
-    n = setup.x0.size
-    x = setup.x0.copy()
-    F = np.zeros((N_FIELDS, n))
-    F[F_V] = setup.V0
-    F[F_V0] = F[F_V]
-    F[F_K] = 0.0  # the released mass starts in the active state: clipped to k_a at the first stage
-    F[F_ND] = 1.0 / setup.dx0
-    return x, F, np.arange(n, dtype=np.int64)
+    """The release of the path (``solver.released_state`` at the set-up's stations and volumes)."""
+    return released_state(setup.x0.copy(), setup.V0, setup.dx0)
 
 
 def simulate_path(cfg, setup: PathSetup, phys, tab: np.ndarray, label: str = "", progress=None, init=None,

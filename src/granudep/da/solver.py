@@ -102,18 +102,24 @@ def constant_bed_table(theta: float, phys: Physics) -> np.ndarray:
     return tab
 
 
+def released_state(x, volume, spacing: float):
+    """A released mass at rest: particles at x (sorted) with their volumes, on a lattice of the given
+    spacing. It starts in the active state (k clipped to k_a at the first stage), with the lattice's
+    number density, so the first L_s is B × spacing (eq 25)."""
+    n = x.shape[0]
+    F = np.zeros((N_FIELDS, n))
+    F[F_V] = volume
+    F[F_V0] = F[F_V]
+    F[F_K] = 0.0
+    F[F_ND] = 1.0 / spacing
+    return x, F, np.arange(n, dtype=np.int64)
+
+
 def initial_state(cfg):
     """The column [0, L0] × [0, H0]: n equal particles at the centres of n equal cells."""
     n = cfg.numerics.n_particles
     dx = cfg.geometry.L0 / n
-    x = (np.arange(n) + 0.5) * dx
-    F = np.zeros((N_FIELDS, n))
-    F[F_V] = cfg.geometry.H0 * dx
-    F[F_V0] = F[F_V]
-    F[F_K] = 0.0  # the released mass starts in the active state: clipped to k_a at the first stage
-    F[F_ND] = 1.0 / dx  # number density of the lattice: first L_s = B dx (eq 25)
-    order = np.arange(n, dtype=np.int64)
-    return x, F, order
+    return released_state((np.arange(n) + 0.5) * dx, cfg.geometry.H0 * dx, dx)
 
 
 def custom_state(x, volume, u):
