@@ -263,6 +263,57 @@ def check_energy(quick: bool = False, switch: str = "strain", n: int = 4000):
     ]
 
 
+def energy_deposition_configs(n: int, folder=None) -> dict:
+    """Two runs with deposition coming to rest, for the energy rows: 1D-A70 (Table 5 A, B; x∞ fixed at
+    2.809 m from the wall, the N = 16 000 no-deposition front of docs/da-engineer-scale.md) and the 1 km
+    path of :func:`energy_pile_config` (A = −0.0313, B = 0.0402 of ``benchmarks/bench_da_path.py``,
+    x∞ fixed at the station 737.5 m, its N = 16 000 no-deposition front). x∞ is fixed so that each row
+    is one run; the energy budget does not depend on it."""
+    a70 = {"case": "1D-A70", "numerics": {"n_particles": n},
+           "deposition": {"enabled": True, "x_inf_mode": "user", "x_inf": 2.809}}
+    path = energy_pile_config("strain", n, 300.0, folder)
+    path["case"] = "energy_pile_deposition"
+    path["deposition"] = {"enabled": True, "ab_source": "user", "A": -0.0313, "B": 0.0402, "x_inf_mode": "user",
+                          "x_inf": 737.5}
+    return {"1D-A70": a70, "1 km path": path}
+
+
+def flow_only_rise(ds) -> float:
+    """The largest rise of E between outputs, relative to E_0 − E_end, when the deposit's energy is left
+    out of E (the bookkeeping before the deposit was booked): what the deposition rows would read
+    without it."""
+    from .energy import G, _particle_fields
+    V, u, h, z, _, c = _particle_fields(ds)
+    E = (V * (0.5 * u ** 2 + G * z + G * c * h / 2.0)).sum(axis=1)
+    return float((np.diff(E) / (E[0] - E[-1])).max())
+
+
+def check_energy_deposition(quick: bool = False):
+    """Runs with deposition must not gain energy either, the deposit booked as bed
+    (``granudep.da.energy``): W_min/ΔE ≤ 1 and no rise of E, within ENERGY_RATIO_TOL / ENERGY_RISE_TOL.
+    --quick: 1D-A70 at N = 300 only; otherwise 1D-A70 and the 1 km path at N = 2000."""
+    n = 300 if quick else 2000
+    rows = []
+    for name, case in energy_deposition_configs(n).items():
+        if quick and name != "1D-A70":
+            continue
+        ds = run_da(case, deposition=True, progress=False)
+        rep = energy_report(ds)
+        dep = float(ds.deposited_volume[-1]) / float(ds.flowing_volume[0])
+        res = (f"{name} with deposition, N = {n}, t = {float(ds.time[-1]):.3g} s, at rest {int(ds.attrs['at_rest'])}, "
+               f"{100 * dep:.0f} % of the volume deposited")
+        rows += [
+            _row("energy", "W_min / (E0 - E_end), deposition", rep["coulomb_ratio"], 1.0,
+                 max(0.0, rep["coulomb_ratio"] - 1.0), ENERGY_RATIO_TOL,
+                 f"energy created / energy lost (Coulomb bound; deposition dissipates too, so well below 1), {res}"),
+            _row("energy", "largest rise of E between outputs / (E0 - E_end), deposition", rep["largest_rise"], 0.0,
+                 max(0.0, rep["largest_rise"]), ENERGY_RISE_TOL,
+                 f"{rep['n_rises']} output intervals with a rise, {res}; with the deposit's energy left out of E "
+                 f"the same run reads {flow_only_rise(ds):.3g}"),
+        ]
+    return rows
+
+
 def run_all(quick: bool = False) -> pd.DataFrame:
     """Every analytic check, one row per compared quantity."""
     rows = []
@@ -273,6 +324,7 @@ def run_all(quick: bool = False) -> pd.DataFrame:
     rows += check_savage_hutter(quick)
     rows += check_coulomb_block(quick)
     rows += check_deposition(quick)
+    rows += check_energy_deposition(quick)
     if not quick:  # DA on a path profile; --quick keeps the constant-theta rows only
         from .path_verification import run_path_checks
         rows += run_path_checks(quick)
