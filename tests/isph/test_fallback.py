@@ -102,7 +102,7 @@ def test_solver_falls_back_to_direct_on_an_indefinite_matrix(method):
 def test_solver_nan_rhs_falls_back_and_the_nan_then_stops_the_run(monkeypatch, tmp_path):
     """A NaN in the PPE right-hand side at step 3: counted fallback, the direct solve's NaN pressure
     stops the run as a blow-up (not a crash) with the partial output written."""
-    real = stepper.ppe.assemble_ppe
+    real = stepper.approximate.assemble_ppe
     calls = [0]
 
     def planted(*a):
@@ -112,7 +112,7 @@ def test_solver_nan_rhs_falls_back_and_the_nan_then_stops_the_run(monkeypatch, t
             rhs = rhs.copy()
             rhs[len(rhs) // 2] = np.nan
         return pi, pj, pd, rhs
-    monkeypatch.setattr(stepper.ppe, "assemble_ppe", planted)
+    monkeypatch.setattr(stepper.approximate, "assemble_ppe", planted)
     out = tmp_path / "nan.nc"
     with pytest.raises(IsphBlowUp, match="non-finite"):
         run_isph("T22-A70", output=out, dx=0.01, t_end=0.05, **{"numerics.projection": "approximate"})

@@ -4,7 +4,7 @@ linear fields, also on a support cut by a free surface."""
 import numpy as np
 import pytest
 
-from granudep.isph import operators
+from granudep.isph import approximate, operators
 from granudep.isph.bundles import Pairs, WallSurface
 from granudep.isph.neighbours import build_neighbours
 
@@ -99,7 +99,7 @@ def test_pressure_gradient_is_exact_for_a_linear_pressure_without_walls():
     lmat = _geometry(c)[4]
     p = 50.0 + 3.0e3 * x - 9.81e3 * y
     empty = np.zeros(0)
-    gpx, gpy = operators.pressure_gradient(c["pairs"], nf, VOL, p, (np.zeros(nf),
+    gpx, gpy = approximate.pressure_gradient(c["pairs"], nf, VOL, p, (np.zeros(nf),
                                            np.zeros(nf)), lmat, WallSurface(empty, empty, empty), 1e-4, 1000.0, np.zeros(nf, np.bool_))
     renorm = ~np.all(np.isclose(lmat, [1.0, 0.0, 0.0, 1.0]), axis=1)
     np.testing.assert_allclose(gpx[renorm], 3.0e3, rtol=1e-9)

@@ -1,7 +1,7 @@
 """The adjoint PPE divergence (isph/projection.py) against a dense NumPy transpose of the gradient."""
 import numpy as np
 
-from granudep.isph import operators
+from granudep.isph import approximate, operators
 from granudep.isph.bundles import WallSurface, pairs_of
 from granudep.isph.projection import adjoint_divergence
 
@@ -30,7 +30,7 @@ def test_adjoint_divergence_is_minus_the_transpose_of_the_gradient():
     for k in range(nf):
         e = np.zeros(nf)
         e[k] = 1.0
-        a, b = operators.pressure_gradient(pairs, nf, vol, e, (zeros, zeros), lmat, WallSurface(empty, empty, empty), 1e-3,
+        a, b = approximate.pressure_gradient(pairs, nf, vol, e, (zeros, zeros), lmat, WallSurface(empty, empty, empty), 1e-3,
                                            1000.0, detached)
         gxm[:, k], gym[:, k] = a, b
     rng = np.random.default_rng(1)

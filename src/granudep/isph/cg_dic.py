@@ -9,7 +9,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .linsolve import (BREAKDOWN, NONFINITE, _any_nonzero, _dot, csr_matvec, stop_threshold)
+from .linsolve import (BREAKDOWN, NONFINITE, _any_nonzero, _dot, cg_advance, converged, csr_matvec,
+                       search_direction, stop_threshold)
 from .parallel import prange_kernel
 # ------------------------------------------------------------------------------------------------
 # CG preconditioned with the diagonal incomplete Cholesky factorisation (DIC), Eisenstat's trick
@@ -242,7 +243,7 @@ def pcg_dic_split(tri, b, x0, rtol, atol, maxiter, mic=0.0):
     else:
         r[:] = b
         nr = math.sqrt(_dot(r, r))
-    if nr < thresh:
+    if converged(nr, thresh):
         return x, 0, 0
     dt, bad = ssor_diagonal(diag, -mic) if mic < 0.0 else mic_diagonal(lp, li, lv, up, uv, diag, mic)
     if bad >= 0:
@@ -273,28 +274,20 @@ def pcg_dic_split(tri, b, x0, rtol, atol, maxiter, mic=0.0):
         rho = _dot(rh, z)
         if not rho > 0.0:
             break  # breakdown (below)
-        if it > 0:
-            beta = rho / rho_prev
-            for i in range(n):
-                p[i] = p[i] * beta + z[i]
-        else:
-            p[:] = z
+        search_direction(p, z, rho, rho_prev, it == 0)
         _eisenstat_product(T, dinv, kd, p, t, s, q)
         pq = _dot(p, q)
         if not pq > 0.0:
             break  # zero/negative curvature (or NaN): A singular or indefinite
-        alpha = rho / pq
-        for i in range(n):
-            eh[i] += alpha * p[i]
-            rh[i] -= alpha * q[i]
+        cg_advance(eh, rh, p, q, rho / pq)
         rho_prev = rho
         nrh = math.sqrt(_dot(rh, rh))
-        if scale * nrh < thresh:
+        if converged(scale * nrh, thresh):
             _upper_solve(up, ui, uv, dinv, eh, e)
             for i in range(n):
                 xt[i] = x[i] + e[i]
             nr = _split_residual(lp, li, lv, up, ui, uv, diag, b, xt, r)
-            if nr < thresh:
+            if converged(nr, thresh):
                 return xt, it + 1, 0
             scale = nr / max(nrh, 1e-300)
     else:
@@ -375,7 +368,7 @@ def pcg_dic_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
             r[s, :] = b
             nr = math.sqrt(_dot(r[s], r[s]))
         out[s] = xs[s].copy()
-        if not nr < thresh[s]:
+        if not converged(nr, thresh[s]):
             run[s] = True
     if not (run[0] or run[1]):
         return out[0], 0, 0, out[1], 0, 0
@@ -429,12 +422,7 @@ def pcg_dic_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
                 its[s] = it
                 infos[s] = BREAKDOWN
                 continue
-            if it > 0:
-                beta = rho[s] / rho_prev[s]
-                for i in range(n):
-                    p[s, i] = p[s, i] * beta + z[i]
-            else:
-                p[s, :] = z
+            search_direction(p[s], z, rho[s], rho_prev[s], it == 0)
         _pair_eisenstat_product((lp, li, lv, up, ui, uv), dinv, kd, p, t, w, q)
         for s in range(2):
             if not run[s]:
@@ -445,18 +433,15 @@ def pcg_dic_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter, mic=0.0):
                 its[s] = it
                 infos[s] = BREAKDOWN  # zero/negative curvature (or NaN)
                 continue
-            alpha = rho[s] / pq
-            for i in range(n):
-                eh[s, i] += alpha * p[s, i]
-                rh[s, i] -= alpha * q[s, i]
+            cg_advance(eh[s], rh[s], p[s], q[s], rho[s] / pq)
             rho_prev[s] = rho[s]
             nrh = math.sqrt(_dot(rh[s], rh[s]))
-            if scale[s] * nrh < thresh[s]:
+            if converged(scale[s] * nrh, thresh[s]):
                 _upper_solve(up, ui, uv, dinv[s], eh[s], e)
                 for i in range(n):
                     xt[i] = xs[s][i] + e[i]
                 nr = _split_residual(lp, li, lv, up, ui, uv, diags[s], bs[s], xt, r[s])
-                if nr < thresh[s]:
+                if converged(nr, thresh[s]):
                     out[s] = xt.copy()
                     its[s] = it + 1
                     run[s] = False

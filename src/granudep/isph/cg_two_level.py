@@ -6,11 +6,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from .linsolve import (BREAKDOWN, NONFINITE, _any_nonzero, _diag_first, _dot, _pcg_loop, _start, _two_level_apply,
-                       stop_threshold)
-from .parallel import prange_kernel
+from .linsolve import BREAKDOWN, NONFINITE, _any_nonzero, _diag_first, _dot, _pcg_loop, _start, stop_threshold
 # ------------------------------------------------------------------------------------------------
 # Two-level CG: Jacobi plus an aggregation coarse space (``numerics.pressure_solver: cg_two_level``;
 # the adjoint-pair PPE's solver, where incomplete Cholesky breaks down)
@@ -137,7 +135,7 @@ def pcg_two_level(indptr, indices, data, b, x0, rtol, atol, maxiter):
     agg, lc, lct, ok = _two_level_setup(indptr, indices, data)
     if not ok:
         return x, 0, BREAKDOWN
-    return _pcg_loop((indptr, indices, data), x, r, dinv, thresh, maxiter, (lc, lct, agg), False)
+    return _pcg_loop((indptr, indices, data), None, x, r, dinv, thresh, maxiter, (lc, lct, agg), False)
 
 
 @njit(cache=True)
@@ -318,65 +316,6 @@ def _free_setup(op, coarse_max):
     return dinv, agg, lc, lct, 0 if ok else BREAKDOWN
 
 
-@prange_kernel
-def _pcg_free_loop(op, x, r, dinv, thresh, maxiter, lc, lct, agg):
-    """:func:`_pcg_loop` (two-level, fixed-order dot products) with A p applied matrix-free
-    (:func:`free_matvec`, each of its two gathers row-parallel)."""
-    wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval = op
-    n = x.size
-    nfp = cptr.size - 1
-    nc = lc.shape[0]
-    z = np.empty(n)
-    p = np.empty(n)
-    q = np.empty(n)
-    gx = np.empty(nfp)
-    gy = np.empty(nfp)
-    rc = np.empty(nc)
-    yc = np.empty(nc)
-    rho_prev = 1.0
-    for it in range(maxiter):
-        rr = _dot(r, r)
-        if math.sqrt(rr) < thresh:
-            return x, it, 0
-        _two_level_apply(lc, lct, agg, dinv, r, z, rc, yc)
-        rho = _dot(r, z)
-        if not rho > 0.0:
-            return x, it, BREAKDOWN
-        if it > 0:
-            beta = rho / rho_prev
-            for i in range(n):
-                p[i] = p[i] * beta + z[i]
-        else:
-            p[:] = z
-        for i in prange(nfp):               # D_Uᵀ p, by particle
-            sx = 0.0
-            sy = 0.0
-            for k in range(cptr[i], cptr[i + 1]):
-                pr = p[crow[k]]
-                sx += ccx[k] * pr
-                sy += ccy[k] * pr
-            gx[i] = sx
-            gy[i] = sy
-        for i in prange(n):                 # q = wd D_U (D_Uᵀ p) + ε L_c p, by row
-            s = 0.0
-            for k in range(rptr[i], rptr[i + 1]):
-                c = rcol[k]
-                s += rx[k] * gx[c] + ry[k] * gy[c]
-            t = 0.0
-            for k in range(lptr[i], lptr[i + 1]):
-                t += lval[k] * p[lcol[k]]
-            q[i] = wd * s + t
-        pq = _dot(p, q)
-        if not pq > 0.0:
-            return x, it, BREAKDOWN
-        alpha = rho / pq
-        for i in range(n):
-            x[i] += alpha * p[i]
-            r[i] -= alpha * q[i]
-        rho_prev = rho
-    return x, maxiter, maxiter
-
-
 def pcg_two_level_free(op, b, x0, rtol, atol, maxiter, coarse_max=FREE_COARSE_MAX):
     """Solve A x = b for the matrix-free PPE operator ``op`` (:func:`ppe_operator.matrix_free_ppe`)
     by the two-level CG above, warm-started from x0. Same stopping test (‖r‖ < max(rtol ‖b‖, atol),
@@ -397,4 +336,5 @@ def pcg_two_level_free(op, b, x0, rtol, atol, maxiter, coarse_max=FREE_COARSE_MA
     dinv, agg, lc, lct, status = _free_setup(op, coarse_max)
     if status != 0:
         return x, 0, status
-    return _pcg_free_loop(op, x, r, dinv, thresh, maxiter, lc, lct, agg)
+    no_csr = (np.zeros(1, np.int64), np.zeros(0, np.int64), np.zeros(0))   # not read: A is ``op``
+    return _pcg_loop(no_csr, op, x, r, dinv, thresh, maxiter, (lc, lct, agg), False)

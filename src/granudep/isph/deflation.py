@@ -51,7 +51,7 @@ from numba import njit
 
 from .cg_dic import _split_residual, pcg_dic_split
 from .cg_two_level import aggregate_rows, coarse_factor
-from .linsolve import BREAKDOWN, NONFINITE, _dot, coarse_solve, stop_threshold
+from .linsolve import BREAKDOWN, NONFINITE, _dot, coarse_solve, converged, stop_threshold
 
 #: above this many aggregates the dense coarse Cholesky (n_c³ / 3 flops per step) is not set up
 #: and the solve falls back to the SSOR-CG without deflation (~170 000 unknowns at ~70 per aggregate)
@@ -180,7 +180,7 @@ def pcg_ssor_deflated(tri, b, x0, rtol, atol, maxiter, min_unknowns=0):
     x = x0.copy()
     r = np.empty(n)
     nr = _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r)
-    if nr < thresh:
+    if converged(nr, thresh):
         return x, 0, 0
     rc = np.empty(nc)
     yc = np.empty(nc)
@@ -228,9 +228,9 @@ def pcg_ssor_deflated(tri, b, x0, rtol, atol, maxiter, min_unknowns=0):
             r[i] = ri
             rr += ri * ri
         rho_prev = rho
-        if math.sqrt(rr) < thresh:
+        if converged(math.sqrt(rr), thresh):
             nr = _split_residual(lp, li, lv, up, ui, uv, diag, b, x, r)
-            if nr < thresh:
+            if converged(nr, thresh):
                 return x, it + 1, 0
             _deflate_start(lc, lct, agg, app, api, apv, x, r, rc, yc)   # restart from the true residual
             first = True

@@ -17,6 +17,12 @@ matrices share the off-diagonal entries and differ on the diagonal (stored first
 the kernels write it), so each sweep over the off-diagonal entries serves both products. Each of
 the two recurrences is exactly the single-system one (each stops on its own test).
 
+The recurrence itself is written once and shared by every CG of granudep (here, :mod:`.cg_dic`,
+:mod:`.cg_two_level`, :mod:`.deflation`): :func:`stop_threshold` and :func:`converged` (the stopping
+test), :func:`search_direction` (p = z or β p + z) and :func:`cg_advance` (x += α p, r −= α q). The
+Jacobi and two-level CG, on a CSR matrix or on the matrix-free PPE operator, are one loop,
+:func:`_pcg_loop`.
+
 Return convention: (x, iterations, info) with info = 0 on convergence, ``maxiter`` otherwise
 (scipy's), and x = b when ‖b‖ = 0. Breakdowns never raise: info = -1 for a
 non-positive incomplete-Cholesky pivot, ``BREAKDOWN`` (-2) for a curvature p·Ap that is not
@@ -48,6 +54,33 @@ DOT_BLAS_MAX = 10000
 def stop_threshold(b_norm, rtol, atol):
     """The stopping test every CG of granudep shares: stop once ‖r‖₂ < max(rtol ‖b‖₂, atol) (scipy's)."""
     return max(atol, rtol * b_norm)
+
+
+@njit(cache=True, inline="always")
+def converged(residual_norm, thresh):
+    """The stopping decision every CG of granudep takes, on a residual norm (recursive, transformed
+    or true) against :func:`stop_threshold`'s threshold."""
+    return residual_norm < thresh
+
+
+@njit(cache=True, inline="always")
+def search_direction(p, z, rho, rho_prev, first):
+    """The CG recurrence's new search direction: p = z at the first iteration, else p = β p + z with
+    β = ρ/ρ_prev (ρ = r·M⁻¹r), in place."""
+    if first:
+        p[:] = z
+    else:
+        beta = rho / rho_prev
+        for i in range(p.size):
+            p[i] = p[i] * beta + z[i]
+
+
+@njit(cache=True, inline="always")
+def cg_advance(x, r, p, q, alpha):
+    """The CG recurrence's step: x += α p, r −= α q (q = A p), in place."""
+    for i in range(x.size):
+        x[i] += alpha * p[i]
+        r[i] -= alpha * q[i]
 
 
 _BLAS_PINNED = False
@@ -171,19 +204,20 @@ def pcg_jacobi(indptr, indices, data, b, x0, rtol, atol, maxiter):
     if status != 0:
         return x, 0, status
     no_coarse = np.empty((0, 0))
-    return _pcg_loop((indptr, indices, data), x, r, dinv, thresh, maxiter,
+    return _pcg_loop((indptr, indices, data), None, x, r, dinv, thresh, maxiter,
                      (no_coarse, no_coarse, np.empty(0, np.int64)), True)
 
 
 @prange_kernel
-def _pcg_loop(A, x, r, dinv, thresh, maxiter, coarse, blas_dot):
-    """The CG iteration on A = (indptr, indices, data) from the initial state (x, r): preconditioner
-    z = D⁻¹ r, plus the coarse correction P A_c⁻¹ Pᵀ r when coarse = (lc, lct, agg) has a non-empty
-    ``lc`` (the Cholesky factor of A_c, :func:`pcg_two_level`); dot products by ``np.dot`` (``blas_dot``: scipy's iterates bit for bit) or :func:`_dot`.
-    The product A p runs over the rows in parallel (``prange``), each row summed as
-    :func:`csr_matvec` does, so the iterates do not depend on the thread count.
-    Returns (x, iterations, info) as :func:`pcg_jacobi`."""
-    indptr, indices, data = A
+def _pcg_loop(A, free, x, r, dinv, thresh, maxiter, coarse, blas_dot):
+    """The CG iteration from the initial state (x, r) on A = (indptr, indices, data) in CSR (``free``
+    None), or on the matrix-free PPE operator ``free`` (A then not read; :func:`ppe_operator.matrix_free_operator`,
+    applied as :func:`cg_two_level.free_matvec` does, each of its two gathers row-parallel):
+    preconditioner z = D⁻¹ r, plus the coarse correction P A_c⁻¹ Pᵀ r when coarse = (lc, lct, agg) has a
+    non-empty ``lc`` (the Cholesky factor of A_c, :func:`pcg_two_level`); dot products by ``np.dot``
+    (``blas_dot``: scipy's iterates bit for bit) or :func:`_dot`. The product A p runs over the rows in
+    parallel (``prange``), each row summed as :func:`csr_matvec` does, so the iterates do not depend on
+    the thread count. Returns (x, iterations, info) as :func:`pcg_jacobi`."""
     lc, lct, agg = coarse
     n = x.size
     nc = lc.shape[0]
@@ -195,7 +229,7 @@ def _pcg_loop(A, x, r, dinv, thresh, maxiter, coarse, blas_dot):
     rho_prev = 1.0
     for it in range(maxiter):
         rr = np.dot(r, r) if blas_dot else _dot(r, r)
-        if math.sqrt(rr) < thresh:
+        if converged(math.sqrt(rr), thresh):
             return x, it, 0
         if nc > 0:
             _two_level_apply(lc, lct, agg, dinv, r, z, rc, yc)
@@ -205,24 +239,42 @@ def _pcg_loop(A, x, r, dinv, thresh, maxiter, coarse, blas_dot):
         rho = np.dot(r, z) if blas_dot else _dot(r, z)
         if not rho > 0.0:
             return x, it, BREAKDOWN  # r·M⁻¹r <= 0 (or NaN): the preconditioner not positive
-        if it > 0:
-            beta = rho / rho_prev
-            for i in range(n):
-                p[i] = p[i] * beta + z[i]
+        search_direction(p, z, rho, rho_prev, it == 0)
+        if free is None:
+            indptr, indices, data = A
+            for i in prange(n):             # q = A p (csr_matvec, row-parallel)
+                s = 0.0
+                for k in range(indptr[i], indptr[i + 1]):
+                    s += data[k] * p[indices[k]]
+                q[i] = s
         else:
-            p[:] = z
-        for i in prange(n):                 # q = A p (csr_matvec, row-parallel)
-            s = 0.0
-            for k in range(indptr[i], indptr[i + 1]):
-                s += data[k] * p[indices[k]]
-            q[i] = s
+            wd, rptr, rcol, rx, ry, cptr, crow, ccx, ccy, lptr, lcol, lval = free
+            nfp = cptr.size - 1
+            gx = np.empty(nfp)
+            gy = np.empty(nfp)
+            for i in prange(nfp):           # D_Uᵀ p, by particle
+                sx = 0.0
+                sy = 0.0
+                for k in range(cptr[i], cptr[i + 1]):
+                    pr = p[crow[k]]
+                    sx += ccx[k] * pr
+                    sy += ccy[k] * pr
+                gx[i] = sx
+                gy[i] = sy
+            for i in prange(n):             # q = wd D_U (D_Uᵀ p) + ε L_c p, by row
+                s = 0.0
+                for k in range(rptr[i], rptr[i + 1]):
+                    c = rcol[k]
+                    s += rx[k] * gx[c] + ry[k] * gy[c]
+                t = 0.0
+                for k in range(lptr[i], lptr[i + 1]):
+                    t += lval[k] * p[lcol[k]]
+                q[i] = wd * s + t
         pq = np.dot(p, q) if blas_dot else _dot(p, q)
         if not pq > 0.0:
             return x, it, BREAKDOWN  # zero/negative curvature: A singular or indefinite
         alpha = rho / pq
-        for i in range(n):
-            x[i] += alpha * p[i]
-            r[i] -= alpha * q[i]
+        cg_advance(x, r, p, q, alpha)
         rho_prev = rho
     return x, maxiter, maxiter
 
@@ -301,10 +353,10 @@ def pcg_jacobi_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
     rho_u = 1.0
     rho_v = 1.0
     for it in range(maxiter):
-        if run_u and math.sqrt(np.dot(ru, ru)) < thu:
+        if run_u and converged(math.sqrt(np.dot(ru, ru)), thu):
             run_u = False
             it_u = it
-        if run_v and math.sqrt(np.dot(rv, rv)) < thv:
+        if run_v and converged(math.sqrt(np.dot(rv, rv)), thv):
             run_v = False
             it_v = it
         if not (run_u or run_v):
@@ -318,12 +370,7 @@ def pcg_jacobi_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
                 it_u = it
                 info_u = BREAKDOWN
         if run_u:
-            if it > 0:
-                beta = rho / rho_u
-                for i in range(n):
-                    pu[i] = pu[i] * beta + zu[i]
-            else:
-                pu[:] = zu
+            search_direction(pu, zu, rho, rho_u, it == 0)
             rho_u = rho
         if run_v:
             for i in range(n):
@@ -334,12 +381,7 @@ def pcg_jacobi_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
                 it_v = it
                 info_v = BREAKDOWN
         if run_v:
-            if it > 0:
-                beta = rho / rho_v
-                for i in range(n):
-                    pv[i] = pv[i] * beta + zv[i]
-            else:
-                pv[:] = zv
+            search_direction(pv, zv, rho, rho_v, it == 0)
             rho_v = rho
         if not (run_u or run_v):
             break
@@ -351,10 +393,7 @@ def pcg_jacobi_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
                 it_u = it
                 info_u = BREAKDOWN
         if run_u:
-            alpha = rho_u / pq
-            for i in range(n):
-                xu[i] += alpha * pu[i]
-                ru[i] -= alpha * qu[i]
+            cg_advance(xu, ru, pu, qu, rho_u / pq)
         if run_v:
             pq = np.dot(pv, qv)
             if not pq > 0.0:
@@ -362,10 +401,7 @@ def pcg_jacobi_pair(A, diag_v, bu, xu0, bv, xv0, rtol, atol, maxiter):
                 it_v = it
                 info_v = BREAKDOWN
         if run_v:
-            alpha = rho_v / pq
-            for i in range(n):
-                xv[i] += alpha * pv[i]
-                rv[i] -= alpha * qv[i]
+            cg_advance(xv, rv, pv, qv, rho_v / pq)
     else:
         if run_u:
             it_u = maxiter

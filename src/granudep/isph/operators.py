@@ -271,42 +271,6 @@ def divergence(pairs, nf, vol, u, v, lmat):
 
 
 @prange_kernel
-def pressure_gradient(pairs, nf, vol, p, vel, lmat, walls, dt, rho, detached):
-    """Renormalised ∇p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij; wall neighbours use the mirror pressure
-    (which reads the predicted velocities vel = (u*, v*)).
-
-    ``detached`` particles (first layer over a wall but farther than 0.75 dx from it) ignore the
-    wall: with the renormalisation the mirror pressure would otherwise hold them at any height
-    within the kernel support (2h), hovering without contact."""
-    us, vs = vel
-    start, nbr, rx, ry, gw = pairs.start, pairs.nbr, pairs.rx, pairs.ry, pairs.gw
-    wnx, wny = walls.nx, walls.ny
-    gpx = np.zeros(nf)
-    gpy = np.zeros(nf)
-    for i in prange(nf):
-        ax = 0.0
-        ay = 0.0
-        for k in range(start[i], start[i + 1]):
-            j = nbr[k]
-            g = gw[k]
-            if j < nf:
-                dp = p[j] - p[i]
-            else:
-                if detached[i]:
-                    continue
-                w = j - nf
-                nx = wnx[w]
-                ny = wny[w]
-                gn = rho / dt * min(us[i] * nx + vs[i] * ny, 0.0)
-                dp = -gn * (nx * rx[k] + ny * ry[k])
-            ax += vol * dp * g * rx[k]
-            ay += vol * dp * g * ry[k]
-        gpx[i] = lmat[i, 0] * ax + lmat[i, 1] * ay
-        gpy[i] = lmat[i, 2] * ax + lmat[i, 3] * ay
-    return gpx, gpy
-
-
-@prange_kernel
 def smoothed_gradient(pairs, nf, h, gx, gy):
     """Kernel (Shepard) average of a granular particle field's gradient over each support: the
     surface normal of the shifting (rather than the raw ∇C, which points at the nearest clump of

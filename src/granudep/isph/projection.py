@@ -1,7 +1,7 @@
 """Energy-consistent projection: the PPE divergence as the negative adjoint of the
 pressure gradient that the corrector applies.
 
-The corrector applies G p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij (renormalised, :func:`operators.pressure_gradient`;
+The corrector applies G p_i = L_i Σ_j V (p_j − p_i) ∇_i W_ij (renormalised, :func:`approximate.pressure_gradient`;
 the wall neighbours add a term that does not depend on p). Its pressure work on a velocity field u
 is −Δt V Σ_i u_i·(G p)_i. With the divergence of the PPE source taken as D = −Gᵀ,
 
@@ -243,7 +243,7 @@ def adjoint_pair_projection(pairs, nf, nw, vol, lmat, walls, fs, p_fs, us, vs, c
     next step and the number of wall nodes released in this one.
 
     ``s``: the density-invariant source −γ ρ/Δt² min(1 − C/C0, 0) on granular rows (as in
-    :func:`ppe.assemble_ppe`); ``solve(indptr, indices, data, rhs, guess)``: the PPE solver.
+    :func:`approximate.assemble_ppe`); ``solve(indptr, indices, data, rhs, guess)``: the PPE solver.
     Walls, a lagged active set: a wall node that pulls (p < 0) is released, held at p = 0 until the
     flow presses into it again (D u < 0 there after a projection); within a step up to
     ``max_passes`` solves release walls, the last solve is used as it is (a wall may pull for that

@@ -3,7 +3,7 @@ particle state of :mod:`.state` (the time loop is :mod:`.run`).
 
 One step (Cummins & Rudman 1999; Shao & Lo 2003; Lind et al. 2012), all per-particle work in the
 numba kernels of :mod:`granudep.isph.operators`, :mod:`~granudep.isph.walls`,
-:mod:`~granudep.isph.viscous`, :mod:`~granudep.isph.ppe`, :mod:`~granudep.isph.shifting`,
+:mod:`~granudep.isph.viscous`, :mod:`~granudep.isph.shifting`,
 :mod:`~granudep.isph.projection`:
 
 1. neighbour list (cell-linked, rebuilt every step), ∇·r, concentration, renormalisation;
@@ -18,7 +18,7 @@ numba kernels of :mod:`granudep.isph.operators`, :mod:`~granudep.isph.walls`,
    ((1 − ε) D Dᵀ + ε L_c) p = −ρ/Δt D u* (+ density-invariant source) over the granular and the
    wetted wall nodes, Dirichlet p_fs on the free surface, solved by SSOR-CG (``cg_dic``; two-level CG: ``cg_two_level``), for the velocity
    u* + Δt/ρ G pⁿ (incremental) or u*; corrector uⁿ⁺¹ = u* − Δt/ρ G (pⁿ⁺¹ − pⁿ) (or − Δt/ρ G pⁿ⁺¹),
-   G = −Dᵀ, energy-stable. ``approximate`` (the earlier scheme): compact PPE
+   G = −Dᵀ, energy-stable. ``approximate`` (the earlier scheme, in its own module :mod:`.approximate`): compact PPE
    Σ a_ij (p_i − p_j) = −ρ/Δt ∇·u*, mirror-pressure Neumann walls, renormalised difference gradient;
 5. positions xⁿ⁺¹ = xⁿ + Δt uⁿ⁺¹ + δr (particle shifting).
 """
@@ -34,7 +34,7 @@ import numba
 import numpy as np
 
 from ..cases import G
-from . import operators, ppe, shifting, viscous, walls
+from . import approximate, operators, shifting, viscous, walls
 from .bed import bed_law
 from .bundles import Pairs, WallSurface, pairs_of
 from .config import IsphConfig
@@ -44,7 +44,7 @@ from .heap import keep_freed_memory
 from .linear_systems import LinearSystems
 from .linsolve import pin_blas_to_one_thread
 from .ppe_operator import apply_gradient, wall_normal_acceleration
-from .projection import adjoint_divergence, adjoint_pair_geometry, adjoint_pair_projection, divergence_entries
+from .projection import adjoint_pair_geometry, adjoint_pair_projection, divergence_entries
 from .rheology import ill_posed_bounds, regularisation_constant, regularised_viscosity
 from .setup import Particles, lattice_constants, reference_concentration, reference_laplacian_sum
 from .state import ParticleState
@@ -64,7 +64,7 @@ def _ppe_thread() -> ThreadPoolExecutor:
 
 class Geometry(NamedTuple):
     """Per-step geometry shared by the stages: concentration, ∇C, renormalisation matrices and their
-    diagonal, wall contact (planes, columns) and detachment (None where no stage reads them)."""
+    diagonal, and the wall contact (planes, columns; None where the bed law does not read it)."""
     conc: np.ndarray
     gcx: np.ndarray
     gcy: np.ndarray
@@ -72,7 +72,6 @@ class Geometry(NamedTuple):
     mdiag: tuple
     contact: np.ndarray | None
     col: np.ndarray | None
-    detached: np.ndarray | None
 
 
 @dataclass
@@ -249,19 +248,17 @@ class IsphSolver(ParticleState):
 
     def _geometry(self, nb: Pairs) -> Geometry:
         """Stage 1b: kernel values, ∇·r, concentration, renormalisation, free surface, and the wall
-        contact where a stage reads it (else None)."""
+        contact where the bed law reads it (else None)."""
         c = self.cfg
         nf, h = self.nf, self.h
         divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(nb, nf, h, self.vol)
         self.fs = divr < c.numerics.free_surface_threshold
-        contact = col = detached = None
-        if c.numerics.projection == "approximate" or (self.slip in walls.FRICTION_LAWS and not self.reaction_friction):
-            # the wall contact is read only by the approximate projection (detachment) and by the
-            # Coulomb drag from the contact pressure (:class:`.bed.FrictionWall` without the reaction)
+        contact = col = None
+        if self.slip in walls.FRICTION_LAWS and not self.reaction_friction:
+            # the Coulomb drag from the contact pressure (:class:`.bed.FrictionWall` without the reaction)
             contact, col = walls.wall_contact(nb, nf, self.x, self.y, self.planes, self.dx, h,
                                               c.wall.cover_offset * self.dx)
-            detached = walls.detached_from_walls(contact, 0.75 * self.dx)
-        return Geometry(conc, gcx, gcy, lmat, mdiag, contact, col, detached)
+        return Geometry(conc, gcx, gcy, lmat, mdiag, contact, col)
 
     def _rheology(self, nb: Pairs, geo: Geometry) -> None:
         """Stage 2: the pressure the friction law sees (eq 5), η and |γ̇| from uⁿ, pⁿ."""
@@ -387,9 +384,8 @@ class IsphSolver(ParticleState):
             if isinstance(ppe_geo, Future):
                 ppe_geo = ppe_geo.result()
             self._project_adjoint_pair(nb, lmat_p, dmat, geo.conc, us, vs, dt, ppe_geo)
-        else:
-            self._project_approximate(nb, geo.lmat, lmat_p, geo.conc, us, vs, dt,
-                                      geo.detached)
+        else:   # the study variant, kept in its own module (:mod:`.approximate`)
+            approximate.project(self, nb, geo, lmat_p, us, vs, dt)
 
     def _shift_and_move(self, nb: Pairs, geo: Geometry, u_old, v_old, us, vs, dt: float) -> None:
         """Stage 5: particle shifting, the new positions, the wall clamps and their energy terms."""
@@ -430,33 +426,6 @@ class IsphSolver(ParticleState):
         self.e_mech = e_mech
         self.t += dt
         self.step_no += 1
-
-    def _project_approximate(self, nb: Pairs, lmat, lmat_p, conc, us, vs, dt, detached):
-        """Approximate projection: compact-Laplacian PPE with mirror-pressure (Neumann) walls, the
-        renormalised difference gradient in the corrector."""
-        c = self.cfg
-        nf, vol, rho = self.nf, self.vol, self.rho
-        if c.numerics.ppe_divergence == "adjoint":
-            div = adjoint_divergence(nb, nf, vol, us, vs, lmat_p)
-        else:
-            div = operators.divergence(nb, nf, vol, us, vs, lmat)
-        unknown = np.full(nf, -1, np.int64)
-        interior = ~self.fs
-        n_unknown = int(interior.sum())
-        unknown[interior] = np.arange(n_unknown)
-        # free-surface Dirichlet value: p = 0 holds on the surface, which lies dx/2 beyond the centre
-        # of a free-surface particle: p_fs = ρ g cosθ dx/2 (bed-normal hydrostatics), or 0
-        p_new = np.where(self.fs, self.p_fs, 0.0)
-        if n_unknown:
-            pi, pj, pd, rhs = ppe.assemble_ppe(nb, nf, vol, (unknown, n_unknown), p_new, div, (us, vs),
-                                               (conc, self.c0, self.density_relaxation(dt)), self.wall_surface,
-                                               (dt, rho, self.eps2, self.a_full, self.lap_norm))
-            p_new[interior] = self.linear.solve_ppe(pi, pj, pd, rhs, self.p[interior])
-        self.p = p_new
-        gpx, gpy = operators.pressure_gradient(nb, nf, vol, self.p, (us, vs), lmat_p, self.wall_surface,
-                                               dt, rho, detached)
-        self.u = us - dt / rho * gpx
-        self.v = vs - dt / rho * gpy
 
     def _project_adjoint_pair(self, nb: Pairs, lmat_p, dmat, conc, us, vs, dt, ppe_geo=None):
         """Adjoint-pair projection (:func:`projection.adjoint_pair_projection`): G = −Dᵀ, walls carry
