@@ -17,9 +17,10 @@ runs and mix its own tolerance into the convergence). Wall and CPU seconds are a
         [--n-max 4000] [--csv docs/data/da_convergence.csv] [--figure docs/figures/da_convergence.png]
         [--set deposition.own_deposit=include ...]
 
-W_min/dE and the largest energy rise between outputs (runs without deposition; ``granudep.da.energy``):
-the Coulomb friction work can be no less than μ g Σ V Δx (horizontal displacements), so
-W_min / (E_0 − E_end) ≤ 1 unless the scheme created energy, and E never rises between outputs.
+W_min/dE and the largest energy rise between outputs (``granudep.da.energy``; with deposition the
+deposit's energy is booked as bed): the Coulomb friction work can be no less than μ g Σ V Δx
+(horizontal displacements), so W_min / (E_0 − E_end) ≤ 1 unless the scheme created energy, and E
+never rises between outputs.
 
 docs/data/da_convergence.csv holds one ladder per ``--label``: "strain" (the default earth pressure;
 ``--cases 1D-A70`` then ``--cases path``, ``--n-min 1000 --n-max 8000``, about 40 CPU-min, most of it

@@ -99,7 +99,8 @@ def test_example_configs_resolve():
 def test_verification_table_has_the_contract_columns(monkeypatch):
     from granudep.da import verification as v
     monkeypatch.setattr(v, "check_dam_break", lambda quick, *a: [])
-    for name in ("check_kerswell", "check_savage_hutter", "check_coulomb_block", "check_deposition"):
+    for name in ("check_kerswell", "check_savage_hutter", "check_coulomb_block", "check_deposition",
+                 "check_energy_deposition"):
         monkeypatch.setattr(v, name, lambda quick: [])
     table = v.run_all(quick=True)
     assert list(table.columns) == ["check", "quantity", "value", "reference", "error", "tolerance", "passed", "note"]

@@ -59,13 +59,17 @@ def converged_n(df: pd.DataFrame, tol: float = TOL) -> int | None:
 
 def format_table(df: pd.DataFrame) -> str:
     lines = [f"{'N':>7} {'runout m':>11} {'chg/doubl':>9} {'flow t s':>9} {'steps':>7} {'CPU s':>8} "
-             f"{'W_min/dE':>8} {'E rises':>7}"]
+             f"{'W_min/dE':>8} {'E rises':>7} {'max rise':>9}"]
     for r in df.itertuples():
         ch = "" if not math.isfinite(r.change_per_doubling) else f"{100 * r.change_per_doubling:.2f} %"
         ft = f"{r.flow_time_s:.3f}" if math.isfinite(r.flow_time_s) else "not rest"
         ratio = f"{r.coulomb_ratio:.4f}" if math.isfinite(r.coulomb_ratio) else "-"
         rises = str(r.n_energy_rises) if r.n_energy_rises >= 0 else "-"
-        lines.append(f"{r.n:>7} {r.runout_m:>11.4f} {ch:>9} {ft:>9} {r.steps:>7} {r.cpu_s:>8.2f} {ratio:>8} {rises:>7}")
+        top = f"{r.largest_energy_rise:.1e}" if math.isfinite(r.largest_energy_rise) else "-"
+        lines.append(f"{r.n:>7} {r.runout_m:>11.4f} {ch:>9} {ft:>9} {r.steps:>7} {r.cpu_s:>8.2f} {ratio:>8} {rises:>7} "
+                     f"{top:>9}")
+    lines.append("W_min/dE <= 1 and no rise of E (max rise: the largest, relative to E0 - E_end) unless the scheme "
+                 "created energy (granudep.da.energy)")
     c = converged_n(df)
     lines.append(f"converged N (< {100 * TOL:g} % per doubling from there on): "
                  + (f"{c}" if c is not None else f"not reached up to N = {int(df.n.iloc[-1])}"))

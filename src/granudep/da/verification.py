@@ -303,10 +303,11 @@ def check_energy_deposition(quick: bool = False):
         res = (f"{name} with deposition, N = {n}, t = {float(ds.time[-1]):.3g} s, at rest {int(ds.attrs['at_rest'])}, "
                f"{100 * dep:.0f} % of the volume deposited")
         rows += [
-            _row("energy", "W_min / (E0 - E_end), deposition", rep["coulomb_ratio"], 1.0,
+            _row("energy", f"W_min / (E0 - E_end), {name} with deposition", rep["coulomb_ratio"], 1.0,
                  max(0.0, rep["coulomb_ratio"] - 1.0), ENERGY_RATIO_TOL,
                  f"energy created / energy lost (Coulomb bound; deposition dissipates too, so well below 1), {res}"),
-            _row("energy", "largest rise of E between outputs / (E0 - E_end), deposition", rep["largest_rise"], 0.0,
+            _row("energy", f"largest rise of E between outputs / (E0 - E_end), {name} with deposition",
+                 rep["largest_rise"], 0.0,
                  max(0.0, rep["largest_rise"]), ENERGY_RISE_TOL,
                  f"{rep['n_rises']} output intervals with a rise, {res}; with the deposit's energy left out of E "
                  f"the same run reads {flow_only_rise(ds):.3g}"),

@@ -99,7 +99,7 @@ class LinearSystems:
         unknowns on: :mod:`.deflation`); the assembled matrix by SuperLU if it fails (:meth:`solve_cg`)."""
         rtol = self.owner.cfg.numerics.solver_rtol
         try:
-            if len(op) == 7:
+            if self.ppe_form == "triangles":     # op = (lp, li, lv, up, ui, uv, diag)
                 sol, it, info = pcg_ssor_deflated(op, rhs, guess, rtol, 0.0, 1000,
                                                   self.owner.cfg.numerics.deflation_min_unknowns)
             else:

@@ -115,6 +115,6 @@ def test_verify_rows_with_deposition_quick():
     """``granudep verify da --quick`` carries the two deposition energy rows, both passing."""
     from granudep.da.verification import check_energy_deposition
     rows = check_energy_deposition(quick=True)
-    assert [r["quantity"] for r in rows] == ["W_min / (E0 - E_end), deposition",
-                                             "largest rise of E between outputs / (E0 - E_end), deposition"]
+    assert [r["quantity"] for r in rows] == ["W_min / (E0 - E_end), 1D-A70 with deposition",
+                                             "largest rise of E between outputs / (E0 - E_end), 1D-A70 with deposition"]
     assert all(r["passed"] for r in rows)
