@@ -141,3 +141,25 @@ def test_bed_laws_never_create_energy_on_a_collapse(law, bed_stress):
     assert float(ds.attrs["energy_max_excess"]) <= 2e-3
     wall = float(ds["wall_friction_energy"].values[-1])
     assert 0.0 < wall < float(ds["dissipated_energy"].values[-1])
+
+
+def test_the_step_asks_the_bed_law_and_reads_no_slip_code_of_its_own():
+    """Every decision of the bed law is the law object's (``isph.bed``): the class per ``wall.slip``,
+    its hooks, and no stage of the step testing a slip code itself."""
+    import inspect
+    from types import SimpleNamespace
+
+    from granudep.isph import bed, stepper, walls
+    kinds = {name: type(bed.bed_law(code)).__name__ for name, code in walls.SLIP_CODES.items()}
+    assert kinds == {"no_slip": "ViscousWall", "navier": "ViscousWall", "free_slip": "NoWallTerm",
+                     "coulomb": "FrictionWall", "mu_w_i": "FrictionWall", "stress_limited": "FrictionWall",
+                     "navier_overwrite": "NavierOverwrite"}
+    friction = bed.bed_law(walls.SLIP_COULOMB)
+    assert friction.needs_contact(SimpleNamespace(reaction_friction=False))
+    assert not friction.needs_contact(SimpleNamespace(reaction_friction=True))
+    assert bed.bed_law(walls.SLIP_NAVIER_OVERWRITE).needs_velocity_gradient
+    assert not bed.bed_law(walls.SLIP_NAVIER).needs_velocity_gradient
+    assert bed.bed_law(walls.SLIP_NAVIER_OVERWRITE).after_projection(SimpleNamespace(grad=None), None) is None
+    src = inspect.getsource(stepper)
+    for name in ("FRICTION_LAWS", "SLIP_NAVIER_OVERWRITE", "SLIP_COULOMB", "navier_overwrite("):
+        assert name not in src, name

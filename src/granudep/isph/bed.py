@@ -1,29 +1,53 @@
-"""The bed law: what the walls (bed and back wall) do to the granular particles in the predictor.
+"""The bed law: what the walls (bed and back wall) do to the granular particles.
 
-One object, chosen once from ``cfg.wall`` (:func:`bed_law`), which the predictor asks for its wall
-terms: the increments it adds to the implicit viscous diagonals (the walls' traction), and the part
-of the diagonals that is the walls' own, booked as wall-friction dissipation (``wall_du``, ``wall_dv``):
+One object, chosen once from ``cfg.wall`` (:func:`bed_law`), which the step asks for everything the
+law decides:
+
+- ``predictor_terms``: the increments it adds to the implicit viscous diagonals (the walls'
+  traction), and the part of the diagonals that is the walls' own, booked as wall-friction
+  dissipation (``wall_du``, ``wall_dv``);
+- ``needs_contact(s)``: whether the geometry stage computes the wall contact for it;
+- ``needs_velocity_gradient``: whether the rheology stage computes ∇u for it when the rheology does not;
+- ``after_projection(s, nb)``: a change it makes to the new velocity after the projection (the
+  kinetic energy before it, booked by the step as the wall's work), or None.
+
+The laws:
 
 - :class:`ViscousWall` (``wall.slip``: ``no_slip``, ``navier``): the wall term of the viscous
   operator (already in its matrix; a Navier wall with its slip length in metres), with the μ(I)
   wall stress re-evaluated at the bed's normal stress where ``wall.bed_stress`` asks for it;
 - :class:`FrictionWall` (``coulomb``, ``mu_w_i``, ``stress_limited``): a drag from the walls' normal
   reaction, or the Coulomb drag from the contact pressure, added to the diagonals;
-- :class:`NoWallTerm` (``free_slip``, ``navier_overwrite``): nothing in the predictor (the authors'
-  overwrite acts after the projection, in ``IsphSolver._shift_and_move``).
+- :class:`NavierOverwrite` (``navier_overwrite``): the authors' discrete slip, the first layer's
+  velocity overwritten after the projection;
+- :class:`NoWallTerm` (``free_slip``): nothing.
 
-The kernels are in :mod:`.walls`. Adding a bed law: a class with ``predictor_terms``, its name in
-``walls.SLIP_CODES`` (the config choice) and one line in :func:`bed_law`, with its tests.
+The kernels are in :mod:`.walls`. Adding a bed law: a class here (the hooks it needs), its name in
+``walls.SLIP_CODES`` and ``wall.slip``'s choices (the config choice), one line in :func:`bed_law`,
+and its tests.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from . import walls
+from .energy import kinetic_energy
 
 
 class NoWallTerm:
-    """No wall term in the predictor."""
+    """No wall term in the predictor, nothing after the projection."""
+
+    #: the rheology stage computes ∇u for this law even when the rheology does not need it
+    needs_velocity_gradient = False
+
+    def needs_contact(self, s) -> bool:
+        """The geometry stage computes the wall contact (``walls.wall_contact``) for this law."""
+        return False
+
+    def after_projection(self, s, nb):
+        """A change to the new velocity (s.u, s.v) after the projection; returns the kinetic energy
+        before it (the step books the change as the wall's work), or None when there is none."""
+        return None
 
     def predictor_terms(self, s, nb, geo, dt: float, data, indptr, diag_v):
         """(diag_v, wall_du, wall_dv): the v diagonal and the walls' own diagonal increments (None:
@@ -33,6 +57,10 @@ class NoWallTerm:
 
 class FrictionWall(NoWallTerm):
     """Coulomb, μ_w(I) or stress-limited drag (``wall.slip``: coulomb, mu_w_i, stress_limited)."""
+
+    def needs_contact(self, s) -> bool:
+        """The Coulomb drag from the contact pressure (without the walls' reaction) reads the contact."""
+        return not s.reaction_friction
 
     def predictor_terms(self, s, nb, geo, dt: float, data, indptr, diag_v):
         c, nf, rho = s.cfg, s.nf, s.rho
@@ -122,10 +150,28 @@ class ViscousWall(NoWallTerm):
         return diag_v, wall_du, wall_dv
 
 
+class NavierOverwrite(NoWallTerm):
+    """The authors' slip (``wall.slip: navier_overwrite``): after the projection the first layer's
+    velocity is replaced by slip_length (I − n n)·γ̇·n from uⁿ's gradient (explicit; unstable for a
+    slip length above 2 dx)."""
+
+    needs_velocity_gradient = True
+
+    def after_projection(self, s, nb):
+        if s.grad is None:
+            return None
+        ke = kinetic_energy(s.m, s.u, s.v)
+        walls.navier_overwrite(nb, s.nf, s.grad, s.u, s.v, s.wall_surface, walls.OVERWRITE_BAND * s.dx,
+                               s.cfg.wall.slip_length)
+        return ke
+
+
 def bed_law(slip: int) -> NoWallTerm:
     """The bed law of a ``walls.SLIP_CODES`` code."""
     if slip in walls.FRICTION_LAWS:
         return FrictionWall()
     if slip in (walls.SLIP_NO, walls.SLIP_NAVIER):
         return ViscousWall()
+    if slip == walls.SLIP_NAVIER_OVERWRITE:
+        return NavierOverwrite()
     return NoWallTerm()

@@ -254,8 +254,7 @@ class IsphSolver(ParticleState):
         divr, conc, gcx, gcy, lmat, mdiag = operators.geometry_terms(nb, nf, h, self.vol)
         self.fs = divr < c.numerics.free_surface_threshold
         contact = col = None
-        if self.slip in walls.FRICTION_LAWS and not self.reaction_friction:
-            # the Coulomb drag from the contact pressure (:class:`.bed.FrictionWall` without the reaction)
+        if self.bed.needs_contact(self):
             contact, col = walls.wall_contact(nb, nf, self.x, self.y, self.planes, self.dx, h,
                                               c.wall.cover_offset * self.dx)
         return Geometry(conc, gcx, gcy, lmat, mdiag, contact, col)
@@ -274,11 +273,11 @@ class IsphSolver(ParticleState):
         else:
             p_seen = self.p
         self.p_rheo = np.maximum(p_seen, self.p_floor)
-        if rh.model != "mu_i" and self.slip != walls.SLIP_NAVIER_OVERWRITE:
+        if rh.model != "mu_i" and not self.bed.needs_velocity_gradient:
             return
         grad = operators.velocity_gradient(nb, nf, self.vol, (self.x, self.y), (self.u, self.v), geo.lmat, self.wall_surface,
                                            walls.gradient_slip_code(self.slip), c.wall.slip_length, self.dx)
-        self.grad = grad  # uⁿ's gradient: the authors' slip (navier_overwrite) reads it after the projection
+        self.grad = grad  # uⁿ's gradient: a bed law may read it after the projection (:class:`.bed.NavierOverwrite`)
         if rh.model != "mu_i":
             return
         m = c.material
@@ -398,15 +397,11 @@ class IsphSolver(ParticleState):
         sx, sy = shifting.shifting(nf, (geo.gcx, geo.gcy), (self.u, self.v), alpha, h, dt, c.numerics.shifting,
                                    self.dx, (ncx, ncy))
         eb.projection += pressure_work(self.m, u_old, v_old, us, vs, self.u, self.v)
-        overwrite = self.slip == walls.SLIP_NAVIER_OVERWRITE and self.grad is not None
-        if overwrite:
-            # the authors' slip overwrites the first layer's new velocity: its kinetic-energy change
-            # is booked as the wall's work (dissipated when positive, created when negative)
-            ke = kinetic_energy(self.m, self.u, self.v)
-            walls.navier_overwrite(nb, nf, self.grad, self.u, self.v, self.wall_surface,
-                                   walls.OVERWRITE_BAND * self.dx, c.wall.slip_length)
+        # a bed law that changes the new velocity (the authors' slip): its kinetic-energy change is
+        # booked as the wall's work (dissipated when positive, created when negative)
+        ke = self.bed.after_projection(self, nb)
         ke_new = kinetic_energy(self.m, self.u, self.v)
-        if overwrite:
+        if ke is not None:
             eb.wall_friction += ke - ke_new
             eb.dissipated += ke - ke_new
         eb.shifting += -self.m * (self.gx * float(np.sum(sx)) + self.gy * float(np.sum(sy)))
