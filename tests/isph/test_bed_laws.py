@@ -159,7 +159,11 @@ def test_the_step_asks_the_bed_law_and_reads_no_slip_code_of_its_own():
     assert not friction.needs_contact(SimpleNamespace(reaction_friction=True))
     assert bed.bed_law(walls.SLIP_NAVIER_OVERWRITE).needs_velocity_gradient
     assert not bed.bed_law(walls.SLIP_NAVIER).needs_velocity_gradient
+    cfg = SimpleNamespace(numerics=SimpleNamespace(h_factor=1.3, dx=0.004), wall_layers=3,
+                          wall=SimpleNamespace(slip_length=0.018))
+    assert bed.bed_law(walls.SLIP_NO).wall_norm(cfg, 1.25) == 1.25
+    assert bed.bed_law(walls.SLIP_NAVIER).wall_norm(cfg, 1.25) != 1.25
     assert bed.bed_law(walls.SLIP_NAVIER_OVERWRITE).after_projection(SimpleNamespace(grad=None), None) is None
     src = inspect.getsource(stepper)
-    for name in ("FRICTION_LAWS", "SLIP_NAVIER_OVERWRITE", "SLIP_COULOMB", "navier_overwrite("):
+    for name in ("FRICTION_LAWS", "SLIP_NAVIER_OVERWRITE", "SLIP_COULOMB", "navier_overwrite(", 'slip == "navier"'):
         assert name not in src, name

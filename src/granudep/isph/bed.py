@@ -7,6 +7,7 @@ law decides:
   traction), and the part of the diagonals that is the walls' own, booked as wall-friction
   dissipation (``wall_du``, ``wall_dv``);
 - ``needs_contact(s)``: whether the geometry stage computes the wall contact for it;
+- ``wall_norm(c, wall_ns)``: the lattice norm of the viscous wall stress for it (a Navier wall's own);
 - ``needs_velocity_gradient``: whether the rheology stage computes ∇u for it when the rheology does not;
 - ``after_projection(s, nb)``: a change it makes to the new velocity after the projection (the
   kinetic energy before it, booked by the step as the wall's work), or None.
@@ -32,6 +33,7 @@ import numpy as np
 
 from . import walls
 from .energy import kinetic_energy
+from .setup import lattice_constants
 
 
 class NoWallTerm:
@@ -43,6 +45,11 @@ class NoWallTerm:
     def needs_contact(self, s) -> bool:
         """The geometry stage computes the wall contact (``walls.wall_contact``) for this law."""
         return False
+
+    def wall_norm(self, c, wall_ns: float) -> float:
+        """The lattice norm of the viscous wall stress the viscous operator uses with this law
+        (:func:`.setup.lattice_constants`): the no-slip one, ``wall_ns``."""
+        return wall_ns
 
     def after_projection(self, s, nb):
         """A change to the new velocity (s.u, s.v) after the projection; returns the kinetic energy
@@ -104,6 +111,16 @@ class FrictionWall(NoWallTerm):
 class ViscousWall(NoWallTerm):
     """The viscous wall term of a no-slip or Navier wall (``wall.slip``: no_slip, navier), with the
     normal stress of the μ(I) wall stress chosen by ``wall.bed_stress``."""
+
+    def __init__(self, navier: bool = False):
+        self.navier = navier
+
+    def wall_norm(self, c, wall_ns: float) -> float:
+        """A Navier wall: the norm of its own linear profile u = y + slip_length, so that its stress is
+        exact for that profile (no slip: ``wall_ns``)."""
+        if not self.navier:
+            return wall_ns
+        return lattice_constants(c.numerics.h_factor, 0.01, c.wall_layers, c.wall.slip_length / c.numerics.dx)["wall_ns"]
 
     def predictor_terms(self, s, nb, geo, dt: float, data, indptr, diag_v):
         c, nf, rho = s.cfg, s.nf, s.rho
@@ -171,7 +188,7 @@ def bed_law(slip: int) -> NoWallTerm:
     if slip in walls.FRICTION_LAWS:
         return FrictionWall()
     if slip in (walls.SLIP_NO, walls.SLIP_NAVIER):
-        return ViscousWall()
+        return ViscousWall(navier=slip == walls.SLIP_NAVIER)
     if slip == walls.SLIP_NAVIER_OVERWRITE:
         return NavierOverwrite()
     return NoWallTerm()

@@ -112,16 +112,14 @@ class IsphSolver(ParticleState):
         self.p_fs = 0.5 * self.rho * G * math.cos(th) * self.dx if c.numerics.free_surface_pressure == "half_layer" else 0.0
         self.c0 = reference_concentration(self.h, self.dx)
         lc = lattice_constants(c.numerics.h_factor, 0.01, c.wall_layers)
+        self.slip = walls.SLIP_CODES[c.wall.slip]
+        self.bed = bed_law(self.slip)
         # wall_ns: the no-slip wall stress norm (the stress-limited law's rigid bed); wall_norm: the
         # configured law's (a Navier wall: its slip length in dx), so that its stress is exact
         self.lap_norm, self.wall_ns = lc["lap"], lc["wall_ns"]
-        self.wall_norm = (lattice_constants(c.numerics.h_factor, 0.01, c.wall_layers,
-                                            c.wall.slip_length / c.numerics.dx)["wall_ns"]
-                          if c.wall.slip == "navier" else self.wall_ns)
+        self.wall_norm = self.bed.wall_norm(c, self.wall_ns)
         self.a_full = (reference_laplacian_sum(self.h, self.dx, self.eps2) / self.lap_norm
                        if c.numerics.kernel_completion else 0.0)
-        self.slip = walls.SLIP_CODES[c.wall.slip]
-        self.bed = bed_law(self.slip)
         self.mean = viscous.MEAN_CODES[c.rheology.pair_mean]
         planes = [(0.0, 1.0, 0.0)] + ([(1.0, 0.0, 0.0)] if c.geometry.back_wall else [])
         self.planes = np.array(planes, dtype=float)
