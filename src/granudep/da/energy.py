@@ -80,29 +80,29 @@ def has_deposit(ds: xr.Dataset) -> bool:
         float(ds.deposited_volume.max()) > 0.0
 
 
-def energy_series(ds: xr.Dataset) -> np.ndarray:
+def energy_series(ds: xr.Dataset, with_deposit: bool = True) -> np.ndarray:
     """E(t) at every output (m⁴ s⁻² per unit density and width; m³ … on a constant slope), the
-    deposit's share included."""
+    deposit's share included (``with_deposit=False``: the particles' share alone)."""
     V, u, h, z, _, c = _particle_fields(ds)
     E = (V * (0.5 * u ** 2 + G * z + G * c * h / 2.0)).sum(axis=1)
-    if has_deposit(ds):
+    if with_deposit and has_deposit(ds):
         xp = ds.x_particle.values if "x_particle" in ds else ds.x.values
         E = E + _deposit_energy(ds, xp, V, c)
     return E
 
 
-def coulomb_ratio(ds: xr.Dataset, mu: float) -> float:
-    """W_min / (E_0 − E_end) with W_min = μ g Σ V_i Δx_i (horizontal): ≤ 1 unless energy was created."""
+def coulomb_ratio(ds: xr.Dataset, mu: float, E: np.ndarray | None = None) -> float:
+    """W_min / (E_0 − E_end) with W_min = μ g Σ V_i Δx_i (horizontal): ≤ 1 unless energy was created
+    (E: :func:`energy_series`, computed when not given)."""
     V, _, _, _, xh, _ = _particle_fields(ds)
-    E = energy_series(ds)
+    E = energy_series(ds) if E is None else E
     w_min = G * mu * float((V[-1] * (xh[-1] - xh[0])).sum())
     return w_min / float(E[0] - E[-1])
 
 
-def largest_rise(ds: xr.Dataset) -> tuple[float, int]:
-    """(largest E(t_k+1) − E(t_k) over the outputs relative to E_0 − E_end (≤ 0 when E never rises),
-    number of output intervals in which E rose by more than 1e-9 of E_0 − E_end)."""
-    E = energy_series(ds)
+def largest_rise(E: np.ndarray) -> tuple[float, int]:
+    """(largest E(t_k+1) − E(t_k) over the outputs of the series E relative to E_0 − E_end (≤ 0 when E
+    never rises), number of output intervals in which E rose by more than 1e-9 of E_0 − E_end)."""
     drop = float(E[0] - E[-1])
     d = np.diff(E) / drop
     return (float(d.max()) if d.size else 0.0), int(np.count_nonzero(d > 1e-9))
@@ -111,5 +111,6 @@ def largest_rise(ds: xr.Dataset) -> tuple[float, int]:
 def energy_report(ds: xr.Dataset) -> dict:
     """The energy checks of a run, with or without deposition."""
     mu = math.tan(math.radians(float(ds.attrs.get("phi_basal_deg", 25.5))))
-    rise, n = largest_rise(ds)
-    return {"coulomb_ratio": coulomb_ratio(ds, mu), "largest_rise": rise, "n_rises": n}
+    E = energy_series(ds)
+    rise, n = largest_rise(E)
+    return {"coulomb_ratio": coulomb_ratio(ds, mu, E), "largest_rise": rise, "n_rises": n}

@@ -51,10 +51,6 @@ from ..cases import momentum_scale
 GEOMETRY_STEP = 0.25
 
 
-# ----------------------------------------------------------------------------------------------
-# Python driver
-# ----------------------------------------------------------------------------------------------
-
 @dataclass(frozen=True)
 class PathSetup:
     """A run's bed and release, resolved once (stations s in m along the bed from the first point)."""
@@ -122,7 +118,7 @@ def path_params(cfg, setup: PathSetup, phys, centripetal: bool):
 
 def initial_path_state(setup: PathSetup):
     """The release of the path (``solver.released_state`` at the set-up's stations and volumes)."""
-    return released_state(setup.x0.copy(), setup.V0, setup.dx0)
+    return released_state(setup.x0.copy(), setup.V0, 1.0 / setup.dx0)
 
 
 def simulate_path(cfg, setup: PathSetup, phys, tab: np.ndarray, label: str = "", progress=None, init=None,

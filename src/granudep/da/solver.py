@@ -102,16 +102,16 @@ def constant_bed_table(theta: float, phys: Physics) -> np.ndarray:
     return tab
 
 
-def released_state(x, volume, spacing: float):
-    """A released mass at rest: particles at x (sorted) with their volumes, on a lattice of the given
-    spacing. It starts in the active state (k clipped to k_a at the first stage), with the lattice's
-    number density, so the first L_s is B × spacing (eq 25)."""
+def released_state(x, volume, number_density: float):
+    """A released mass at rest: particles at x (sorted) with their volumes and the number density of
+    their lattice (1/spacing), so the first L_s is B / number density (eq 25). It starts in the
+    active state (k clipped to k_a at the first stage)."""
     n = x.shape[0]
     F = np.zeros((N_FIELDS, n))
     F[F_V] = volume
     F[F_V0] = F[F_V]
     F[F_K] = 0.0
-    F[F_ND] = 1.0 / spacing
+    F[F_ND] = number_density
     return x, F, np.arange(n, dtype=np.int64)
 
 
@@ -119,20 +119,15 @@ def initial_state(cfg):
     """The column [0, L0] × [0, H0]: n equal particles at the centres of n equal cells."""
     n = cfg.numerics.n_particles
     dx = cfg.geometry.L0 / n
-    return released_state((np.arange(n) + 0.5) * dx, cfg.geometry.H0 * dx, dx)
+    return released_state((np.arange(n) + 0.5) * dx, cfg.geometry.H0 * dx, 1.0 / dx)
 
 
 def custom_state(x, volume, u):
     """Any initial particle set (sorted positions x, volumes, velocities): for analytic checks."""
     x = np.array(x, dtype=float)
-    n = x.shape[0]
-    F = np.zeros((N_FIELDS, n))
-    F[F_V] = volume
-    F[F_V0] = volume
+    x, F, order = released_state(x, volume, (x.shape[0] - 1) / (x[-1] - x[0]))
     F[F_U] = u
-    F[F_K] = 0.0  # active state, as the released column
-    F[F_ND] = (n - 1) / (x[-1] - x[0])
-    return x, F, np.arange(n, dtype=np.int64)
+    return x, F, order
 
 
 def column_track(cfg, dxg: float) -> Track:
