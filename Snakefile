@@ -8,6 +8,7 @@
 #
 # Every rule is a thin call of the `granudep` command line; the physics lives in src/granudep.
 
+import os
 import sys
 
 from snakemake.utils import min_version, validate
@@ -49,6 +50,21 @@ rule all:
     input:
         ALL_TARGETS,
     default_target: True
+
+
+# the run's own record (wall time, targets, cores, commit) for the README status block
+import time as _time
+
+_RUN_STARTED = _time.time()
+
+
+onsuccess:
+    # only a run that rebuilt the summary is recorded (a no-op rerun keeps the record it found)
+    if not workflow.dryrun and os.path.isfile(f"{RESULTS}/summary.md") \
+            and os.path.getmtime(f"{RESULTS}/summary.md") >= _RUN_STARTED:
+        from granudep.report.run_record import write_run_record
+
+        write_run_record(f"{BENCH}/run.json", _RUN_STARTED, workflow.dag_settings.targets, workflow.cores)
 
 
 # The method, in the paper's order:

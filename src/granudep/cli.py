@@ -61,6 +61,8 @@ def _cmd_verify(args) -> int:
         table = pd.concat([pd.read_csv(f) for f in args.merge], ignore_index=True)  # in the order given
     else:
         table = module.run_all(quick=args.quick, **({"checks": args.checks.split(",")} if args.checks else {}))
+    if hasattr(module, "annotate_table"):  # isph: the chain-dx error beside each checked row
+        table = module.annotate_table(table)
     print(table.to_string(index=False))
     write_text(table.to_csv(index=False), args.output)
     from .verification_gate import count, exit_code
@@ -99,8 +101,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, help="CSV: check, quantity, value, reference, error, tolerance, passed, note")
     p.add_argument("--quick", action="store_true", help="coarser resolutions (CI smoke)")
     p.add_argument("--checks", default=None, metavar="NAME[,NAME]", help="run only these checks (isph: "
-                   "hydrostatic, film_flow, sliding_block, bagnold, decelerating_layer, dam_break, dam_break_approximate, "
-                   "collapse_t22a70)")
+                   "hydrostatic, film_flow, navier_film, sliding_block, bagnold, navier_bagnold, decelerating_layer, "
+                   "dam_break, dam_break_approximate, collapse_t22a70; the fine-resolution rows: bagnold_fine, "
+                   "navier_bagnold_fine, decelerating_layer_fine, dam_break_fine, run only when named)")
     p.add_argument("--merge", nargs="+", default=None, metavar="CSV",
                    help="write the table of these partial tables (--checks runs, concatenated in this order) "
                         "instead of running checks")

@@ -8,6 +8,7 @@ and never as passed. ``granudep verify`` exits 1 when a checked row fails.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 import pandas as pd
@@ -81,3 +82,79 @@ def count(table: pd.DataFrame) -> Counts:
 def exit_code(table: pd.DataFrame, report_only: bool = False) -> int:
     """1 when a checked row fails (the workflow and CI stop there), else 0; ``report_only``: always 0."""
     return 0 if report_only or count(table).failed == 0 else 1
+
+
+# --- the chain's resolution beside the checked rows ------------------------------------------------
+# A check's rows differ by resolution only in their ``dx = N mm`` (or ``h/dx = N``) words; the same
+# quantity at the chain's dx (isph.dx = 4 mm) is reported beside the row that is checked at a finer dx.
+_DX_WORDS = re.compile(r"(?:h/)?dx ?= ?([0-9]+(?:\.[0-9]+)?)( ?mm)?")
+_DX_NOTE = re.compile(r"\bdx ?= ?([0-9]+(?:\.[0-9]+)?) ?(mm)?")
+_H_NOTE = re.compile(r"\bh ?= ?([0-9.]+ ?(?:mm|m))")
+
+
+def row_dx_mm(quantity: str, note: str = "") -> float:
+    """The particle spacing of a verification row in mm, read from its quantity (``dx = 2 mm``) or its
+    note (``dx=4 mm``, ``dx=0.004`` in metres); NaN when the row names none."""
+    m = re.search(r"\bdx ?= ?([0-9]+(?:\.[0-9]+)?) ?mm", str(quantity))
+    if m:
+        return float(m.group(1))
+    m = _DX_NOTE.search(str(note))
+    if not m:
+        return math.nan
+    return float(m.group(1)) * (1.0 if m.group(2) else 1e3)  # a bare number in a note is in metres
+
+
+def pair_key(check: str, quantity: str, note: str = "") -> str:
+    """The quantity of a row with its resolution words removed (plus the layer depth of a note, so
+    that a layer of another depth is another quantity)."""
+    q = _DX_WORDS.sub("", str(quantity))
+    q = re.sub(r" \(reported[^)]*\)", "", q)
+    q = re.sub(r"[ ,]+$", "", re.sub(r",\s*,", ",", q)).strip()
+    h = _H_NOTE.search(str(note))
+    return f"{check}\t{q}" + (f"\th={h.group(1).replace(' ', '')}" if h else "")
+
+
+def chain_dx_pairs(table: pd.DataFrame, chain_dx_mm: float) -> pd.DataFrame:
+    """Per checked row that has the same quantity at the chain's dx in the table: check, quantity,
+    the checked row's dx, error, tolerance and status, and the chain-dx row's dx, error and status."""
+    s = statuses(table)
+    notes = table["note"] if "note" in table else pd.Series("", index=table.index)
+    dxs = [row_dx_mm(q, n) for q, n in zip(table["quantity"], notes)]
+    keys = [pair_key(c, q, n) for c, q, n in zip(table["check"], table["quantity"], notes)]
+    chain = {}
+    for i, (k, d) in enumerate(zip(keys, dxs)):
+        if math.isfinite(d) and abs(d - chain_dx_mm) < 1e-9:
+            chain.setdefault(k, i)
+    rows = []
+    for i, (k, d) in enumerate(zip(keys, dxs)):
+        if s.iloc[i] == REPORTED or k not in chain or chain[k] == i:
+            continue
+        j = chain[k]
+        rows.append({"check": table["check"].iloc[i], "quantity": table["quantity"].iloc[i], "dx_mm": d,
+                     "error": float(table["error"].iloc[i]), "tolerance": float(table["tolerance"].iloc[i]),
+                     "status": s.iloc[i], "chain_dx_mm": chain_dx_mm, "chain_error": float(table["error"].iloc[j]),
+                     "chain_status": s.iloc[j], "chain_tolerance": float(pd.to_numeric(table["tolerance"].iloc[j],
+                                                                                       errors="coerce"))})
+    return pd.DataFrame(rows, columns=["check", "quantity", "dx_mm", "error", "tolerance", "status", "chain_dx_mm",
+                                       "chain_error", "chain_status", "chain_tolerance"])
+
+
+def with_chain_dx_error(table: pd.DataFrame, chain_dx_mm: float) -> pd.DataFrame:
+    """``table`` with a column ``chain_dx_error``: beside each checked row, the error of the same
+    quantity at the chain's dx (NaN where the suite has no such row)."""
+    out = table.copy()
+    pairs = chain_dx_pairs(table, chain_dx_mm)
+    col = pd.Series(math.nan, index=out.index)
+    for r in pairs.itertuples():
+        hit = (out["check"] == r.check) & (out["quantity"] == r.quantity)
+        col[hit] = r.chain_error
+    out["chain_dx_error"] = col
+    return out
+
+
+def checked_at_dx(table: pd.DataFrame, dx_mm: float) -> int:
+    """How many checked rows are at this particle spacing."""
+    s = statuses(table)
+    notes = table["note"] if "note" in table else pd.Series("", index=table.index)
+    return int(sum(st != REPORTED and math.isfinite(d := row_dx_mm(q, n)) and abs(d - dx_mm) < 1e-9
+                   for st, q, n in zip(s, table["quantity"], notes)))

@@ -29,7 +29,6 @@ rule summary:
         maxima=COMPARE_OUTPUTS["maxima"],
         converged=f"{RESULTS}/compare/reference_converged.csv",
         diagnosis=DIAGNOSIS_OUTPUTS["table"],
-        da_readings=f"{RESULTS}/compare/da_readings.csv",
         extra_figures=list(EXTRA_FIGURES.values()),
         converged_regression=[f"{CONVERGED_REGRESSION}/table3_comparison.csv"] if CONVERGED_RUNS else [],
         verification=[f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"],
@@ -39,6 +38,9 @@ rule summary:
         # summary says "not available" and names the target
         studies=lambda wc: [p for p in (f"{RESULTS}/figures/convergence.png", f"{RESULTS}/figures/sensitivity.png")
                             if os.path.exists(p)],
+        # the same for the study `snakemake -j2 da_readings` and the target `verify_fine`
+        optional=lambda wc: [p for p in (f"{RESULTS}/compare/da_readings.csv", f"{RESULTS}/verification/isph_fine.csv")
+                             if os.path.exists(p)],
     output:
         md=report(f"{RESULTS}/summary.md", category="Summary"),
         # the same text rendered: the Snakemake report shows an HTML result inline (a .md only as a download)
@@ -57,6 +59,8 @@ rule summary:
         sensitivity=f"{RESULTS}/sensitivity/sensitivity.csv",
         results=RESULTS,
         converged=f"--converged-regression {CONVERGED_REGRESSION}" if CONVERGED_RUNS else "",
+        optional=lambda wc, input: " ".join(
+            f"{'--da-readings' if p.endswith('da_readings.csv') else '--verification-fine'} {p}" for p in input.optional),
         figures=_summary_figure_args,
         captions=os.path.relpath(CAPTIONS_DIR),
     log:
@@ -73,7 +77,7 @@ rule summary:
         " --convergence {params.convergence} --convergence-dx {params.convergence_dx}"
         " --convergence-n {params.convergence_n} --sensitivity {params.sensitivity}"
         " --caption-numbers {output.captions} --results {params.results}"
-        " --matrix {input.matrix} --maxima {input.maxima} --diagnosis {input.diagnosis} --da-readings {input.da_readings} --claims {output.claims}"
+        " --matrix {input.matrix} --maxima {input.maxima} --diagnosis {input.diagnosis} {params.optional} --claims {output.claims}"
         " {params.converged} --figures {params.figures} --captions {params.captions}"
         " > {log} 2>&1"
 

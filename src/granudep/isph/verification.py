@@ -7,6 +7,7 @@ particles (CI smoke); tolerances are stated per check.
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 import pandas as pd
@@ -151,7 +152,22 @@ def sliding_block(quick: bool = False) -> list[dict]:
                  f"a={acc:.3f} m/s2, analytic {ref:.3f} m/s2, mu_B=tan {cfg.wall.phi_basal_deg} deg")]
 
 
-def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
+#: The rows of a check the default suite runs ("chain": the cheap checked rows and the rows at the
+#: chain's resolution dx = 4 mm), the fine-resolution rows (``*_fine`` checks, the ``verify_fine``
+#: target), or both ("all", the functions' default, as the slow tests call them).
+ROW_SETS = ("chain", "fine", "all")
+
+#: the chain's own particle spacing (config isph.dx): the collapse-relevant checks report a row there
+CHAIN_DX = 0.004
+
+
+def _rows_wanted(rows: str, which: str) -> bool:
+    if rows not in ROW_SETS:
+        raise ValueError(f"rows: must be one of {', '.join(ROW_SETS)} (got {rows!r})")
+    return rows in ("all", which)
+
+
+def bagnold(quick: bool = False, theta_deg: float = 30.0, rows: str = "all") -> list[dict]:
     """Steady uniform μ(I) flow down a periodic incline (no-slip bed): Bagnold profile
     u(y) = (2/3)(I_θ/d) sqrt(φ g cosθ) [h^{3/2} − (h−y)^{3/2}], I_θ = I0 (tanθ − μ_s)/(μ_2 − tanθ).
 
@@ -175,14 +191,16 @@ def bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     hydrostatic (through the flat μ(I) that accounts for much of it): thin μ(I) flows are too stiff at
     coarse dx, which is why the T22-A70 runout grows under refinement
     (CHANGELOG.md, the 2026-11-22 measurements)."""
-    rows = []
-    for dx in ((0.001,) if quick else (0.001, 0.0005)):
-        rows.append(_bagnold_row(dx, theta_deg, t_end=BAGNOLD_T_END, t_avg=BAGNOLD_T_AVG))
-    # the reported coarse rows need 20 s of flow (~3 min at 2 mm): not in the quick (smoke) suite
-    for dx in (() if quick else (0.004, 0.002)):
-        rows.append(_bagnold_row(dx, theta_deg, tolerance=math.inf, t_end=BAGNOLD_T_END_COARSE,
-                                 t_avg=BAGNOLD_T_AVG_COARSE))
-    return rows
+    checked = [0.001] if _rows_wanted(rows, "chain") else []
+    reported = []
+    if not quick:  # the reported coarse rows need 20 s of flow: not in the quick (smoke) suite
+        reported += [CHAIN_DX] if _rows_wanted(rows, "chain") else []
+        checked += [0.0005] if _rows_wanted(rows, "fine") else []
+        reported += [0.002] if _rows_wanted(rows, "fine") else []
+    out = [_bagnold_row(dx, theta_deg, t_end=BAGNOLD_T_END, t_avg=BAGNOLD_T_AVG) for dx in checked]
+    out += [_bagnold_row(dx, theta_deg, tolerance=math.inf, t_end=BAGNOLD_T_END_COARSE,
+                         t_avg=BAGNOLD_T_AVG_COARSE) for dx in reported]
+    return out
 
 
 #: Bagnold windows. The 1 mm layer settles in ~7 s (mean u / analytic 0.9893 at 4 s,
@@ -230,13 +248,13 @@ def _bagnold_row(dx: float, theta_deg: float, tolerance: float = 0.03, t_end: fl
                 f"(range {min(means):.3f}..{max(means):.3f}); L2 range {min(errs):.3f}..{max(errs):.3f}")
 
 
-def navier_bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
+def navier_bagnold(quick: bool = False, theta_deg: float = 30.0, rows: str = "all") -> list[dict]:
     """Steady μ(I) flow on a Navier bed: Bagnold's profile shifted by the slip speed b γ̇_w, γ̇_w =
     (I_θ/d) sqrt(φ g cosθ h) the bed's shear rate (the slip is b times the wall's shear rate, whatever
     the rheology). The layer (h = 20 mm, θ = 30°) starts from that profile and runs 4 s; the error is
     the relative L2 error of the particle velocities averaged over t = 3..4 s, at b = 4 and 18 mm.
     Checked at dx = 1 and 0.5 mm (20 and 40 particles over the depth), tolerance 5 %; reported at dx =
-    2 mm. The 5 %
+    2 mm and at the chain's 4 mm (five particles over the depth). The 5 %
     was fixed before the runs for both resolutions; at 2 mm (10 particles, where the no-slip layer's
     mean speed wanders within 0.97..1.12 of Bagnold's) b = 4 mm measured 5.6 % (b = 18 mm: 3.6 %), so
     the 2 mm rows were made reported after measuring (docs/verification.md); the 0.5 mm rows, with the
@@ -244,12 +262,14 @@ def navier_bagnold(quick: bool = False, theta_deg: float = 30.0) -> list[dict]:
     per 1 mm row, several per 0.5 mm row)."""
     if quick:
         return []
-    rows = []
+    wanted = ([CHAIN_DX, 0.001] if _rows_wanted(rows, "chain") else []) + \
+        ([0.002, 0.0005] if _rows_wanted(rows, "fine") else [])
+    out = []
     for b in NAVIER_SLIP_LENGTHS:
-        for dx in NAVIER_BAGNOLD_DX:
+        for dx in sorted(wanted, reverse=True):
             tol = NAVIER_BAGNOLD_TOLERANCE if dx <= NAVIER_BAGNOLD_CHECKED_DX else math.inf
-            rows.append(_bagnold_row(dx, theta_deg, tolerance=tol, t_end=4.0, t_avg=1.0, slip_length=b))
-    return rows
+            out.append(_bagnold_row(dx, theta_deg, tolerance=tol, t_end=4.0, t_avg=1.0, slip_length=b))
+    return out
 
 
 def decelerating_layer_history(h: float, dx: float, bed_stress: str = "bed", theta_deg: float = 22.0,
@@ -282,7 +302,7 @@ def _decelerating_row(h: float, dx: float, tolerance: float, theta_deg: float = 
                 f"{below[0] if below.size else float('nan'):.2f} s (reference {ref.t_stop:.2f} s)")
 
 
-def decelerating_layer(quick: bool = False) -> list[dict]:
+def decelerating_layer(quick: bool = False, rows: str = "all") -> list[dict]:
     """A uniform μ(I) layer launched at 1 m/s on a 22° no-slip bed, below its static friction
     (tan 22° = 0.404 < μ_s = 0.477): it decelerates and stops. The transient has no closed form; the
     reference is the converged 1D finite-volume solution of the same equations
@@ -292,12 +312,16 @@ def decelerating_layer(quick: bool = False) -> list[dict]:
     10 mm at 1 mm). Measured: 0.027 and 0.022 m/s. Reported (no tolerance, full suite):
     sheets 2 and 3 particles thick, the regime of the T22 fronts, where every first-layer treatment
     errs by 0.08–0.38 m/s (``benchmarks/decelerating_layer.py``, docs/model.md)."""
-    rows = [_decelerating_row(0.02, 0.002, 0.03)]
-    if not quick:
-        rows.append(_decelerating_row(0.01, 0.001, 0.03))
-        rows.append(_decelerating_row(0.006, 0.002, math.inf))
-        rows.append(_decelerating_row(0.004, 0.002, math.inf))
-    return rows
+    out = [_decelerating_row(0.02, 0.002, 0.03)] if _rows_wanted(rows, "chain") else []
+    if not quick and _rows_wanted(rows, "chain"):
+        # the chain's dx: the same 20 mm layer with 5 particles, and a 3-particle front sheet
+        out.append(_decelerating_row(0.02, CHAIN_DX, math.inf))
+        out.append(_decelerating_row(0.012, CHAIN_DX, math.inf))
+        out.append(_decelerating_row(0.006, 0.002, math.inf))
+        out.append(_decelerating_row(0.004, 0.002, math.inf))
+    if not quick and _rows_wanted(rows, "fine"):
+        out.append(_decelerating_row(0.01, 0.001, 0.03))
+    return out
 
 
 def collapse_t22a70(quick: bool = False) -> list[dict]:
@@ -357,7 +381,7 @@ def dam_break_config(dx: float, slip: str = "free_slip", t_end: float = 1.0, **n
 
 
 def dam_break(quick: bool = False, projection: str | None = None, resolutions=None,
-              tolerance: float = 0.005, numerics: dict | None = None) -> list[dict]:
+              tolerance: float = 0.005, numerics: dict | None = None, rows: str = "all") -> list[dict]:
     """Water dam break (Newtonian, low viscosity): every SPH code is expected to run it. Rows per dx:
     stable to t = 1 s (no blow-up), the largest rise of E_kin + E_pot + dissipated above E_0 (tolerance
     0.5 % of E_ref = m g Σ y(0)), and the surge front speed over t = 0.1..0.3 s against Ritter's
@@ -367,7 +391,8 @@ def dam_break(quick: bool = False, projection: str | None = None, resolutions=No
     rows = []
     name = "dam_break" if projection is None else f"dam_break_{projection}"
     if resolutions is None:
-        resolutions = (0.008,) if quick else (0.004, 0.002)
+        resolutions = (0.008,) if quick else \
+            tuple(dx for dx, which in ((CHAIN_DX, "chain"), (0.002, "fine")) if _rows_wanted(rows, which))
     for dx in resolutions:
         cfg = load_config(dam_break_config(dx, **({} if projection is None else {"projection": projection}),
                                            **(numerics or {})))
@@ -439,16 +464,31 @@ def dam_break_approximate(quick: bool = False) -> list[dict]:
 
 #: the checks of the suite by name, in table order (``granudep verify isph --checks``)
 CHECKS = {"hydrostatic": hydrostatic, "film_flow": film_flow, "navier_film": navier_film,
-          "sliding_block": sliding_block, "bagnold": bagnold, "navier_bagnold": navier_bagnold,
-          "decelerating_layer": decelerating_layer,
-          "dam_break": dam_break, "dam_break_approximate": dam_break_approximate,
+          "sliding_block": sliding_block,
+          "bagnold": partial(bagnold, rows="chain"), "bagnold_fine": partial(bagnold, rows="fine"),
+          "navier_bagnold": partial(navier_bagnold, rows="chain"),
+          "navier_bagnold_fine": partial(navier_bagnold, rows="fine"),
+          "decelerating_layer": partial(decelerating_layer, rows="chain"),
+          "decelerating_layer_fine": partial(decelerating_layer, rows="fine"),
+          "dam_break": partial(dam_break, rows="chain"), "dam_break_fine": partial(dam_break, rows="fine"),
+          "dam_break_approximate": dam_break_approximate,
           "collapse_t22a70": collapse_t22a70}
+#: the fine-resolution rows (0.5 mm layers, 2 mm dam break): ``snakemake verify_fine``, ``pytest -m slow``
+FINE_CHECKS = tuple(n for n in CHECKS if n.endswith("_fine"))
+
+
+def annotate_table(table: pd.DataFrame) -> pd.DataFrame:
+    """The table with ``chain_dx_error``: beside each checked row, the same quantity's error at the
+    chain's dx (:data:`CHAIN_DX`), where the suite has that row (a merged table is annotated anew)."""
+    from ..verification_gate import with_chain_dx_error
+    return with_chain_dx_error(table.drop(columns=["chain_dx_error"], errors="ignore"), CHAIN_DX * 1e3)
 
 
 def run_all(quick: bool = False, checks=None) -> pd.DataFrame:
     """The suite's table; ``checks``: a subset of :data:`CHECKS` by name (table order kept), so that
-    the workflow can run the long Bagnold layers beside the rest."""
-    names = list(CHECKS) if checks is None else [n for n in CHECKS if n in set(checks)]
+    the workflow can run the long Bagnold layers beside the rest. Without ``checks``: every check
+    but the fine-resolution ones (:data:`FINE_CHECKS`, named explicitly to run)."""
+    names = [n for n in CHECKS if n not in FINE_CHECKS] if checks is None else [n for n in CHECKS if n in set(checks)]
     rows = []
     for name in names:
         rows += CHECKS[name](quick)

@@ -86,7 +86,8 @@ def _cmd_summary(args) -> int:
         card = scorecard(args.results, args.converged_regression)
         write_text(card.to_csv(index=False), args.claims)
         LOG.info("claims scorecard: %s -> %s", tally(card), args.claims)
-    text = build_summary(regression=args.regression, compare=args.compare, verification=args.verification or [],
+    text = build_summary(regression=args.regression, compare=args.compare,
+                         verification=(args.verification or []) + ([args.verification_fine] if args.verification_fine else []),
                          benchmarks=args.benchmarks, figures=args.figures, output=args.output,
                          convergence=args.convergence, sensitivity=args.sensitivity,
                          convergence_dx=args.convergence_dx, convergence_n=args.convergence_n,
@@ -188,6 +189,8 @@ def register(sub) -> None:
     p.add_argument("--diagnosis", metavar="CSV", help="regression diagnosis table (granudep regress-diagnose)")
     p.add_argument("--da-readings", metavar="CSV", help="DA runout per (hu)_C reading (granudep da-readings)")
     p.add_argument("--verification", nargs="*", metavar="CSV", help="granudep verify outputs")
+    p.add_argument("--verification-fine", metavar="CSV", help="the fine-resolution rows (target verify_fine), "
+                   "shown after the others when they have run")
     p.add_argument("--benchmarks", metavar="CSV|DIR", help="benchmark CSV, or a folder of Snakemake benchmark .tsv files")
     p.add_argument("--figures", nargs="+", metavar="NAME=PATH",
                    help="the figures to list, each NAME=PATH (NAME: its caption file NAME.rst) or PATH, or a folder")

@@ -42,6 +42,30 @@ def _range(values, fmt=".0f") -> str:
     return f"{lo:{fmt}}" if f"{lo:{fmt}}" == f"{hi:{fmt}}" else f"{lo:{fmt}}–{hi:{fmt}}"
 
 
+def _run(root: Path) -> str:
+    from .run_record import read_run_record
+    rec = read_run_record(root / "benchmarks" / "run.json")
+    if rec is None:
+        return f"**Last run**: {_missing('benchmarks/run.json')}."
+    return (f"**Last run** (`results/benchmarks/run.json`): `snakemake` targets {', '.join(rec['targets'])} on "
+            f"{rec.get('cores')} cores, wall time {float(rec['wall_s']) / 60:.1f} min (the install not included), "
+            f"ended {rec.get('ended_utc')}, commit `{str(rec.get('commit'))[:12]}`"
+            + (" (uncommitted changes)" if "dirty" in str(rec.get("commit")) else "") + ".")
+
+
+def _chain_dx(root: Path) -> str:
+    """The collapse-relevant checks at the chain's dx beside their checked rows (isph.csv, and the
+    fine rows of isph_fine.csv when `verify_fine` has run)."""
+    from .summary import chain_dx_lines
+    tables = [t for t in (_csv(root / "verification" / "isph.csv"), _csv(root / "verification" / "isph_fine.csv"))
+              if t is not None]
+    if not tables:
+        return f"**Verification at the chain's dx**: {_missing('verification/isph.csv')}."
+    lines = chain_dx_lines(pd.concat(tables, ignore_index=True))
+    fine = "" if len(tables) == 2 else " (the fine rows: `snakemake -j2 verify_fine`, not run)"
+    return "**Verification at the chain's dx** (4 mm)" + fine + ": " + ("; ".join(lines) if lines else "no row pairs") + "."
+
+
 def _verification(root: Path) -> str:
     parts = []
     for stage, label in (("da", "DA"), ("isph", "2D ISPH")):
@@ -170,7 +194,8 @@ def variant_lines(root: Path) -> list[str]:
 def status_block(results: str | Path) -> str:
     """The generated Markdown block (markers included) for the results folder ``results``."""
     root = Path(results)
-    items = [_verification(root), *_claims(root), *_tables(root), *_comparison(root), *variant_lines(root)]
+    items = [_run(root), _verification(root), _chain_dx(root), *_claims(root), *_tables(root), *_comparison(root),
+             *variant_lines(root)]
     return "\n".join([BEGIN, *[f"- {line}" for line in items], END])
 
 
