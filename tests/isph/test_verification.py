@@ -1,4 +1,6 @@
 """Analytic checks of the 2D ISPH solver (the same functions `granudep verify isph` runs)."""
+import math
+
 import numpy as np
 import pytest
 
@@ -27,8 +29,25 @@ def test_newtonian_open_channel_poiseuille_matches_analytic_profile():
 
 
 def test_coulomb_wall_friction_decelerates_sliding_layer_at_analytic_rate():
-    # a = g (tan(phi_B) cos(theta) - sin(theta)) within 15 %
-    _assert_rows(v.sliding_block(quick=True))
+    # a = g (mu_B cos(theta) - sin(theta)), mu_B = tan(phi_B). While the bed slides, the layer's momentum
+    # balance makes the mean acceleration exactly this rigid-block value whatever the internal shear (it
+    # only redistributes momentum within the layer), so the error is the discrete bed friction force's
+    # alone, amplified by mu_B cos(theta) / (mu_B cos(theta) - sin(theta)) = 6.5 (the deceleration is the
+    # small difference of friction and gravity). The check must resolve the bed friction angle to the
+    # 0.1 deg to which it is given (phi_B = 25.5 deg): 0.1 deg more or less changes a by 2.9 %.
+    # (Measured: -2.0 % at dx = 4 mm, -1.0 % at 2 mm; the row's own tolerance, 15 %, is 0.5 deg of phi_B.)
+    from granudep.isph.config import load_config
+    rows = v.sliding_block(quick=True)
+    _assert_rows(rows)
+    phi_b = load_config(v.layer_config(22.0, 0.02, 0.004, wall={"slip": "coulomb"})).wall.phi_basal_deg
+    th = math.radians(22.0)
+
+    def decel(phi_deg):
+        return math.tan(math.radians(phi_deg)) * math.cos(th) - math.sin(th)
+
+    tolerance = decel(phi_b + 0.1) / decel(phi_b) - 1.0
+    assert 0.028 < tolerance < 0.030  # 2.9 %
+    assert abs(rows[0]["error"]) <= tolerance, rows[0]
 
 
 def test_decelerating_layer_follows_the_1d_reference():
@@ -72,22 +91,53 @@ def test_bagnold_profile():
     _assert_rows(v.bagnold(quick=False))
 
 
+#: the T22-A70 failure-plane angle from the horizontal, Rankine's 45 deg + phi/2 (phi = 25.5 deg)
+RANKINE_DEG = 45.0 + 0.5 * 25.5
+
+
+def _fit_resolution_deg(angle_from_bed_deg, dx, H0):
+    """Angle change of the fitted failure plane when the failure surface moves by one ``dx`` (the
+    lattice step of the bands' smallest initial x) between the lowest and the highest band: the fit
+    spans initial heights 0.1..0.9 H0, so d(beta) = sin^2(beta) dx / (0.8 H0)."""
+    return np.degrees(np.sin(np.radians(angle_from_bed_deg)) ** 2 * dx / (0.8 * H0))
+
+
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="the paper model (Navier slip 0.018 m) at 4 mm: failure plane 65.3 deg "
-                   "(Rankine 57.75 +- 5, paper 55.8), t_s 19.6 t_c (paper 13.5 +- 3); no-slip bed: 57.9 deg, 18.2")
-def test_t22a70_failure_plane_and_time_to_rest():
+def test_t22a70_paper_model_departs_from_rankine_and_rests_late():
+    # The paper model (Navier slip 0.018 m) at 4 mm does not reproduce the paper's failure plane and
+    # time to rest (docs/verification.md: 65.3 deg, Rankine 57.75 +- 5, paper 55.8; t_s 19.6 t_c, paper
+    # 13.5 +- 3; the no-slip bed gives 57.9 deg and 18.2). Asserted is that documented disagreement,
+    # so that a NaN or a crash is not taken for it: the angle steeper than Rankine + 5 deg (the claim's
+    # tolerance) and still a plane rising towards the back wall (< 90 deg); the rest time later than
+    # the paper's + 3 t_c and within the run (30 t_c, at rest).
     rows = v.collapse_t22a70(quick=False)
-    fp, ts = rows[0], rows[1]
-    assert abs(fp["error"]) <= 5.0 and abs(ts["error"]) <= 3.0, (fp["value"], ts["value"])
+    fp, ts, runout = rows
+    assert np.isfinite(fp["value"]) and RANKINE_DEG + 5.0 < fp["value"] < 90.0, fp
+    assert np.isfinite(ts["value"]) and 13.5 + 3.0 < ts["value"] < 30.0, ts
+    assert ts["note"].startswith("status at rest"), ts
+    assert np.isfinite(runout["value"]) and runout["value"] > 0.0, runout  # reported: the front advanced
 
 
-def test_failure_plane_angle_of_a_short_collapse(tmp_path):
+def test_failure_plane_angle_of_a_short_collapse():
     from granudep.isph.analysis import failure_plane_angle
     from granudep.isph.api import run_isph
-    ds = run_isph("T22-A70", dx=0.01, t_end=0.15)
-    fp = failure_plane_angle(ds, t_norm=1.0)
-    # a straight failure surface from the toe into the column: between 25 and 75 deg from the bed
-    assert fp["points"] >= 3 and 25.0 < fp["angle_deg"] < 75.0
+    dx = 0.01
+    fps = {}
+    for slip in ("no_slip", "navier"):  # navier: the default, the paper's slip length 0.018 m
+        ds = run_isph("T22-A70", dx=dx, t_end=0.15, progress=False, **{"wall.slip": slip})
+        fps[slip] = failure_plane_angle(ds, t_norm=1.0)
+        assert fps[slip]["points"] >= 10  # a straight failure surface through most of the column's bands
+        theta, H0 = float(ds.attrs["theta_deg"]), float(ds.attrs["H0"])
+    # on a no-slip bed the active wedge is Rankine's, within the fit's resolution at 10 mm (1.7 deg)
+    # (measured 57.6 deg; 57.9 at 4 mm)
+    no_slip = fps["no_slip"]["angle_horizontal_deg"]
+    assert abs(no_slip - RANKINE_DEG) <= _fit_resolution_deg(RANKINE_DEG - theta, dx, H0), no_slip
+    # on the Navier bed the plane is steeper, as in the full 4 mm run (65.3 deg, the disagreement of
+    # test_t22a70_paper_model_departs_from_rankine_and_rests_late): beyond Rankine + 5 deg and within
+    # the 10 mm and 4 mm fits' resolutions (3.4 deg) of the 4 mm angle (measured 65.5 deg)
+    navier = fps["navier"]["angle_horizontal_deg"]
+    assert navier > RANKINE_DEG + 5.0, navier
+    assert abs(navier - 65.3) <= _fit_resolution_deg(65.3 - theta, dx + 0.004, H0), navier
 
 
 def test_dam_break_default_never_gains_energy_at_8_mm():
@@ -116,10 +166,22 @@ def test_dam_break_energy_target_at_4_and_2_mm():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="the approximate projection's pressure creates energy in the low-"
-                                       "viscosity dam break (+62 % of E_ref by 1 s at 4 mm; 2 mm blows up)")
 def test_dam_break_approximate_fails_the_energy_target_at_4_and_2_mm():
-    _assert_rows(v.dam_break(quick=False, projection="approximate"))
+    # The approximate projection's pressure creates energy in the low-viscosity dam break (docs/model.md).
+    # Asserted is that failure as measured, so that a crash or a NaN is not taken for it: at 4 mm the run
+    # reaches t = 1 s and rises far above the 0.5 % target, by more than 10 % of E_ref (a gain, not a
+    # marginal miss; measured +82 %, pressure work +92 %); at 2 mm the rise stops the run at the energy
+    # limit (10 E_ref, measured at t = 0.31 s).
+    rows = v.dam_break(quick=False, projection="approximate")
+    by = {r["quantity"]: r for r in rows}
+    stable4 = by["stable to t = 1 s, dx = 4 mm (1 = yes)"]
+    energy4 = by["max (E_kin + E_pot + D - E_0)/E_ref, dx = 4 mm"]
+    assert stable4["passed"], stable4
+    assert np.isfinite(energy4["value"]) and 0.1 < energy4["value"] < 10.0 and not energy4["passed"], energy4
+    stable2 = by["stable to t = 1 s, dx = 2 mm (1 = yes)"]
+    energy2 = by["max (E_kin + E_pot + D - E_0)/E_ref, dx = 2 mm"]
+    assert stable2["value"] == 0.0 and "failed: energy rose above E_0" in stable2["note"], stable2
+    assert np.isfinite(energy2["value"]) and energy2["value"] >= 10.0, energy2
 
 
 def test_cli_runs_parts_of_the_suite_and_merges_them_in_order(tmp_path, capsys):
