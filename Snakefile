@@ -39,6 +39,7 @@ wildcard_constraints:
     variant="deposition|nodeposition",
     dx="[0-9]+(\\.[0-9]+)?",
     n="[0-9]+",
+    member="[1-9][0-9]*",
     param="[a-z_]+",
     value="-?[0-9]+(\\.[0-9]+)?",
 
@@ -72,6 +73,7 @@ include: "workflow/rules/warmup.smk"  # compile numba kernels once (no cache rac
 include: "workflow/rules/isph.smk"  # 2D ISPH runs (Section 2.1-2.2, Table 1)
 include: "workflow/rules/monitor.smk"  # monitoring sections (Section 3, eqs 15-17, Appendix)
 include: "workflow/rules/regress.smk"  # critical DA momentum, A and B (Section 4.2, eq 36)
+include: "workflow/rules/ensemble.smk"  # the jittered members of every 2D case, their spread
 include: "workflow/rules/da.smk"  # 1D DA SPH with/without deposition (Sections 2.3-2.4)
 include: "workflow/rules/path.smk"  # DA on the user's slope profiles (path_cases)
 include: "workflow/rules/compare.smk"  # DA against the 2D reference (Section 4.3, Figs 15-16)
@@ -80,4 +82,5 @@ include: "workflow/rules/figures.smk"  # one rule per paper figure
 include: "workflow/rules/summary.smk"  # results/summary.md and benchmark table
 include: "workflow/rules/convergence.smk"  # target `convergence` (not in `all`)
 include: "workflow/rules/sensitivity.smk"  # target `sensitivity` (not in `all`)
+include: "workflow/rules/calibration.smk"  # target `calibration`: the declared L_s calibration (not in `all`)
 include: "workflow/rules/validate.smk"  # every job's stage config, before any job runs

@@ -69,4 +69,5 @@ def test_workflow_and_ci_run_verify_in_the_strict_form():
     from pathlib import Path
     text = (Path(__file__).resolve().parents[1] / "workflow/rules/verify.smk").read_text()
     rules = "\n".join(line.split("#", 1)[0] for line in text.splitlines())  # the rules, not their comments
-    assert rules.count("granudep verify") == 3 and "--report-only" not in rules
+    # verify da, verify isph per part, and the two merges (the chain's parts, the fine parts)
+    assert rules.count("granudep verify") == 4 and "--report-only" not in rules

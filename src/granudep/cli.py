@@ -17,7 +17,7 @@ from .progress import LOG, setup_logging
 
 #: stage modules providing sub-commands, in the paper's order
 STAGES = ("granudep.da.cli", "granudep.isph.cli", "granudep.monitor.cli", "granudep.regress.cli",
-          "granudep.report.cli", "granudep.figures.cli", "granudep.config_cli")
+          "granudep.report.cli", "granudep.figures.cli", "granudep.config_cli", "granudep.calibration")
 
 
 def _cmd_cases(args) -> int:

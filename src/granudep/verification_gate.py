@@ -158,3 +158,22 @@ def checked_at_dx(table: pd.DataFrame, dx_mm: float) -> int:
     notes = table["note"] if "note" in table else pd.Series("", index=table.index)
     return int(sum(st != REPORTED and math.isfinite(d := row_dx_mm(q, n)) and abs(d - dx_mm) < 1e-9
                    for st, q, n in zip(s, table["quantity"], notes)))
+
+
+def chain_dx_lines(table: pd.DataFrame, chain_dx_mm: float = 4.0) -> list[str]:
+    """'bagnold: 0.026 at 1 mm (checked, pass), 0.2 at 4 mm (the chain's dx, reported)' per checked
+    row of ``table`` whose quantity the suite also measures at the chain's dx, and the count of
+    checked rows at the chain's dx."""
+    if not {"check", "quantity", "error", "tolerance"} <= set(table.columns):
+        return []
+    out = []
+    for r in chain_dx_pairs(table, chain_dx_mm).itertuples():
+        unit = " m/s" if "m/s" in r.quantity else ""
+        fmt = (lambda e: f"{e:.3f}{unit}") if unit else (lambda e: f"{100 * e:.1f} %")
+        what = pair_key(r.check, r.quantity).split("\t")[1]
+        out.append(f"`{r.check}` ({what}): "
+                   f"{fmt(r.error)} at {r.dx_mm:g} mm (checked, {r.status}), {fmt(r.chain_error)} at "
+                   f"{r.chain_dx_mm:g} mm (the chain's dx, {r.chain_status})")
+    if out:
+        out.append(f"{checked_at_dx(table, chain_dx_mm)} of {count(table).checked} checked rows are at the chain's dx")
+    return out

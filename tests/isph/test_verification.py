@@ -73,8 +73,10 @@ def test_wall_stress_option_follows_the_1d_reference_on_a_thick_layer():
 def test_decelerating_layer_fine_and_thin_sheets_reported():
     rows = v.decelerating_layer(quick=False)
     _assert_rows(rows)
+    # reported: the 20 mm and 12 mm layers at the chain's dx (5 and 3 particles) and the 3- and
+    # 2-particle sheets at 2 mm; each a finite speed error below the 1 m/s launch speed
     thin = [r for r in rows if not np.isfinite(r["tolerance"])]
-    assert len(thin) == 2 and all(np.isfinite(r["value"]) for r in thin)
+    assert len(thin) == 4 and all(0.0 <= r["value"] < 1.0 for r in thin), [r["value"] for r in thin]
 
 
 @pytest.mark.slow

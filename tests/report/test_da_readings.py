@@ -99,4 +99,5 @@ def test_summary_section_shows_the_readings_table(tmp_path):
     text = section_da_readings(path)
     assert "N = 100" in text and "| *no deposition* |" in text
     assert "| baseline | 1D-A70 | 0.5 | -0.0300 | 0.0400 | 0.800 | 6.00 | 8.00 | -25.0% | 40.0% |" in text
-    assert "Not available" in section_da_readings(tmp_path / "none.csv")
+    # not run: a study target of its own, and the section says how to run it
+    assert "`snakemake -j2 da_readings`" in section_da_readings(tmp_path / "none.csv")

@@ -39,8 +39,8 @@ def test_block_reads_the_numbers_from_the_files(results):
     assert "DA 3 of 3 checked rows pass; 0 reported" in block
     assert "2D ISPH 1 of 2 checked rows pass; 1 reported (failing: `dam_break`)" in block
     assert "61.2° from the horizontal (paper 55.8°" in block
-    assert "T22-A70 14.4 (paper ≈ 13.5)" in block
-    assert "2 reproduced, 1 not reproduced, 0 not checkable of 3 claims" in block
+    assert "T22-A70 14.4 (paper ≈ 13.5, reproduced)" in block
+    assert "2 reproduced, 0 indeterminate, 1 not reproduced, 0 not checkable of 3 claims" in block
     assert "mean |difference| 20.0 % (onset) and 10.0 % (fit intercept) over 2" in block
     assert block.index("a = 0.3: A +54 %") < block.index("a = 0.7: A -424 %")  # sorted by a
     assert "shortens the DA runout by 5 %" in block and "92 % without deposition, 90 % with it" in block
@@ -105,6 +105,6 @@ def test_a_variant_chain_gets_its_own_line(results):
     (results / "variants" / "unfinished").mkdir()
     block = status_block(results)
     line = [ln for ln in block.splitlines() if "Variant `no-slip`" in ln][0]
-    assert "1 of 2 claims reproduced" in line and "45.0 % (onset; 16°: 40.0 %, 22°: 50.0 %)" in line
+    assert "claims: 1 reproduced, 0 indeterminate, 1 not reproduced, 0 not checkable of 2" in line and "45.0 % (onset; 16°: 40.0 %, 22°: 50.0 %)" in line
     assert "t_s T22-A70 18.2" in line and "config/variants/no-slip.yaml" in line
     assert "Variant `unfinished`" in block and "has not finished" in block

@@ -113,7 +113,11 @@ def test_default_config_schedules_the_whole_paper(workdir):
     assert not any(r.startswith(("convergence", "sensitivity")) for r in jobs)
     # paper resolution; every 2D run gets its dx (the Table 1 / 5 runs and the two Fig 6 runs)
     assert jobs["isph_fig6"] == 2
-    assert out.count("--dx 0.004") == n2d + 2
+    # the ensemble: members 1..K-1 of every paper 2D case, each monitored and regressed on its own
+    k = yaml.safe_load((workdir / "config/config.yaml").read_text())["ensemble"]["members"]
+    assert jobs["isph_member"] == jobs["monitor_member"] == (k - 1) * n2d and jobs["regress_member"] == k - 1
+    assert jobs["ensemble"] == 1
+    assert out.count("--dx 0.004") == k * n2d + 2
     # the chain is the default product: the DA runs with deposition use our computed A, B;
     # the reading matrix adds one run per case for Table 5 read as normalised and as dimensional
     for case in ("1D-A30", "1D-A45", "1D-A70", "1D-A124"):
@@ -204,7 +208,7 @@ def test_slurm_profile_dry_runs(workdir):
     # the profile's set-threads reach the 2D runs (without `cores` Snakemake scales them down to
     # the submitting node's core count) and SLURM is asked for as many CPUs
     isph = re.findall(r"NUMBA_NUM_THREADS=(\d+) granudep isph (?!config/isph/fig6)", out)  # the Fig 6 runs: 1 thread
-    assert len(isph) == jobs["isph_run"] and set(isph) == {"4"}
+    assert len(isph) == jobs["isph_run"] + jobs["isph_member"] and set(isph) == {"4"}
     assert out.count("cpus_per_task=4") >= jobs["isph_run"]
 
 

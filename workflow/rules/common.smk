@@ -164,6 +164,26 @@ ACTIVE_FIGURES = [
     and not (name == "fig6" and not FIG6_RUNS)
 ]
 
+# Ensembles (config ensemble): member 0 is the chain's own run; members 1..K-1 live under MEMBERS.
+MEMBERS = f"{RESULTS}/ensemble"
+ENSEMBLE = config.get("ensemble", {})
+MEMBER_IDS = list(range(int(ENSEMBLE.get("members", 1))))
+
+
+def member_root(k):
+    """The results folder of member k: the chain's own for member 0."""
+    return RESULTS if int(k) == 0 else f"{MEMBERS}/m{k}"
+
+
+def member_file(k, stage, case):
+    return f"{member_root(k)}/{stage}/{case}.nc"
+
+
+def member_set_options(k):
+    """The --set options that make member k (seed k, the configured jitter)."""
+    return set_options({"numerics": {"seed": int(k), "jitter": float(ENSEMBLE.get("jitter", 0.01))}}) if int(k) else ""
+
+
 REGRESSION_OUTPUTS = [
     f"{RESULTS}/regression/critical.csv",
     f"{RESULTS}/regression/coefficients.csv",
@@ -182,6 +202,7 @@ ALL_TARGETS = (
     + [f"{RESULTS}/compare/reference_2d.csv", f"{RESULTS}/compare/comparison.csv"]
     + [f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"]
     + [figure_path(n) for n in ACTIVE_FIGURES]
+    + ([f"{MEMBERS}/claims_members.csv", f"{MEMBERS}/quantities.csv"] if len(MEMBER_IDS) > 1 else [])
     + [f"{RESULTS}/summary.md", f"{RESULTS}/caption_numbers.json", f"{RESULTS}/benchmarks/summary.csv"]
     + [f"{RESULTS}/da_path/{c}_{v}.nc" for c in PATH_CASES for v in DA_VARIANTS]
     + [f"{RESULTS}/figures/path_{c}.png" for c in PATH_CASES]

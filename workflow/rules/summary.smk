@@ -32,6 +32,7 @@ rule summary:
         extra_figures=list(EXTRA_FIGURES.values()),
         converged_regression=[f"{CONVERGED_REGRESSION}/table3_comparison.csv"] if CONVERGED_RUNS else [],
         verification=[f"{RESULTS}/verification/da.csv", f"{RESULTS}/verification/isph.csv"],
+        ensemble=[f"{MEMBERS}/claims_members.csv", f"{MEMBERS}/quantities.csv"] if len(MEMBER_IDS) > 1 else [],
         figures=list(SUMMARY_FIGURES.values()),
         # the studies beyond the paper are separate targets: their sections are filled when their
         # outputs exist (a later `snakemake` reruns the summary when they are newer), else the
@@ -59,6 +60,8 @@ rule summary:
         sensitivity=f"{RESULTS}/sensitivity/sensitivity.csv",
         results=RESULTS,
         converged=f"--converged-regression {CONVERGED_REGRESSION}" if CONVERGED_RUNS else "",
+        ensemble=lambda wc, input: (f"--ensemble {input.ensemble[0]} --ensemble-quantities {input.ensemble[1]}"
+                                    if input.ensemble else ""),
         optional=lambda wc, input: " ".join(
             f"{'--da-readings' if p.endswith('da_readings.csv') else '--verification-fine'} {p}" for p in input.optional),
         figures=_summary_figure_args,
@@ -77,7 +80,7 @@ rule summary:
         " --convergence {params.convergence} --convergence-dx {params.convergence_dx}"
         " --convergence-n {params.convergence_n} --sensitivity {params.sensitivity}"
         " --caption-numbers {output.captions} --results {params.results}"
-        " --matrix {input.matrix} --maxima {input.maxima} --diagnosis {input.diagnosis} {params.optional} --claims {output.claims}"
+        " --matrix {input.matrix} --maxima {input.maxima} --diagnosis {input.diagnosis} {params.optional} {params.ensemble} --claims {output.claims}"
         " {params.converged} --figures {params.figures} --captions {params.captions}"
         " > {log} 2>&1"
 

@@ -273,6 +273,12 @@ class Numerics:
                                   "measured 11-30 % faster per step than one thread at 3750-60000 "
                                   "particles, prange slower at 3750 (docs/performance.md; more "
                                   "than two threads not measured). One thread: no effect")
+    seed: int = param(0, ge=0, le=2**31 - 1, unit="1",
+                      doc="ensemble member: 0 = the unperturbed lattice; k > 0 moves every grain particle's "
+                          "initial position by jitter dx N(0, 1) per coordinate, drawn from numpy's "
+                          "default_rng(k) (bit for bit the same for the same k), clipped to the lattice's extent")
+    jitter: float = param(0.01, ge=0.0, le=0.1, unit="1",
+                          doc="standard deviation of the initial position perturbation of a member seed > 0, in dx")
     max_steps: int = param(2_000_000, gt=0, doc="hard cap on the number of time steps")
     energy_limit: float = param(0.01, gt=0.0, le=10.0, unit="1",
                                 doc="stop the run (as a blow-up) when E_kin + E_pot + dissipated rises above "

@@ -30,11 +30,23 @@ def lattice(x0: float, x1: float, y0: float, y1: float, dx: float) -> tuple[np.n
     return X.ravel(), Y.ravel()
 
 
+def perturbed(x: np.ndarray, y: np.ndarray, dx: float, seed: int, jitter: float) -> tuple[np.ndarray, np.ndarray]:
+    """An ensemble member's initial positions: the lattice (seed 0) or, for seed k > 0, every position
+    moved by ``jitter`` dx N(0, 1) per coordinate from ``numpy.random.default_rng(k)``, clipped to
+    the lattice's own extent (no particle starts in a wall or beyond the column)."""
+    if seed == 0 or jitter == 0.0:
+        return x, y
+    rng = np.random.default_rng(seed)
+    px = np.clip(x + jitter * dx * rng.standard_normal(x.size), x.min(), x.max())
+    py = np.clip(y + jitter * dx * rng.standard_normal(y.size), y.min(), y.max())
+    return px, py
+
+
 def build_particles(cfg: IsphConfig) -> Particles:
     """Column [0,L0]×[0,H0] (or a periodic layer of height H0) plus bed and back-wall layers."""
     g, dx = cfg.geometry, cfg.numerics.dx
     nl = cfg.wall_layers
-    fx, fy = lattice(0.0, g.L0, 0.0, g.H0, dx)
+    fx, fy = perturbed(*lattice(0.0, g.L0, 0.0, g.H0, dx), dx, cfg.numerics.seed, cfg.numerics.jitter)
     walls_x, walls_y, nxs, nys, cs = [], [], [], [], []
 
     def add(px, py, nx, ny, c):

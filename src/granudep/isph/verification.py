@@ -388,7 +388,7 @@ def dam_break(quick: bool = False, projection: str | None = None, resolutions=No
     2 sqrt(g H) (the inviscid shallow-water value; reported: real surges are slower, and the
     dam-break measurements themselves are not in this repository). ``projection``: the
     ``numerics.projection`` under test (None: the default; the check name carries any other)."""
-    rows = []
+    out = []
     name = "dam_break" if projection is None else f"dam_break_{projection}"
     if resolutions is None:
         resolutions = (0.008,) if quick else \
@@ -412,7 +412,7 @@ def dam_break(quick: bool = False, projection: str | None = None, resolutions=No
         speed = float(np.polyfit(t[w], front[w], 1)[0]) if w.sum() >= 3 else float("nan")
         ritter = 2.0 * math.sqrt(G * cfg.geometry.H0)
         mm = martin_moyce_comparison(t, snaps.fronts["front_tail"], snaps.fronts["front_v99"], a=cfg.geometry.L0)
-        rows += [
+        out += [
             _row(name, f"stable to t = 1 s, dx = {dx * 1e3:g} mm (1 = yes)", float(stable), 1.0,
                  0.0 if stable else 1.0, 0.0, f"reached t = {s.t:.3f} s, step {s.step_no}; {status[:160]}"),
             _row(name, f"max (E_kin + E_pot + D - E_0)/E_ref, dx = {dx * 1e3:g} mm", excess, 0.0, excess, tolerance,
@@ -426,7 +426,7 @@ def dam_break(quick: bool = False, projection: str | None = None, resolutions=No
                  f"{mm['v99']:+.3f}; largest |difference| {mm['tail_max']:.3f}; reported (experiment: gate "
                  "opening and wetting not modelled)"),
         ]
-    return rows
+    return out
 
 
 def martin_moyce_1952() -> tuple[np.ndarray, np.ndarray]:

@@ -84,6 +84,11 @@ def _cmd_summary(args) -> int:
     if args.claims:
         from .claims import scorecard, tally
         card = scorecard(args.results, args.converged_regression)
+        if args.ensemble:
+            from .ensemble import ensemble_scorecard, read_member_table
+            card = ensemble_scorecard(card, read_member_table(args.ensemble, "--ensemble"),
+                                      read_member_table(args.fine_ensemble, "--fine-ensemble")
+                                      if args.fine_ensemble else None, fine_dx_mm=args.fine_dx_mm)
         write_text(card.to_csv(index=False), args.claims)
         LOG.info("claims scorecard: %s -> %s", tally(card), args.claims)
     text = build_summary(regression=args.regression, compare=args.compare,
@@ -92,7 +97,7 @@ def _cmd_summary(args) -> int:
                          convergence=args.convergence, sensitivity=args.sensitivity,
                          convergence_dx=args.convergence_dx, convergence_n=args.convergence_n,
                          matrix=args.matrix, maxima=args.maxima, claims=card, diagnosis=args.diagnosis,
-                         da_readings=args.da_readings,
+                         da_readings=args.da_readings, ensemble=args.ensemble_quantities,
                          captions=args.captions, results=args.results)
     write_text(text, args.output)
     LOG.info("summary written to %s", args.output)
@@ -189,6 +194,13 @@ def register(sub) -> None:
     p.add_argument("--diagnosis", metavar="CSV", help="regression diagnosis table (granudep regress-diagnose)")
     p.add_argument("--da-readings", metavar="CSV", help="DA runout per (hu)_C reading (granudep da-readings)")
     p.add_argument("--verification", nargs="*", metavar="CSV", help="granudep verify outputs")
+    p.add_argument("--ensemble", metavar="CSV", help="every member's claim values (granudep ensemble -o): the "
+                   "claims then quote the members' mean and spread, with the three verdicts")
+    p.add_argument("--ensemble-quantities", metavar="CSV", help="per-case fronts and rest times over the members "
+                   "(granudep ensemble --quantities)")
+    p.add_argument("--fine-ensemble", metavar="CSV", help="the same members' claim values at a finer dx (the dx "
+                   "change of each claim)")
+    p.add_argument("--fine-dx-mm", type=float, default=float("nan"), help="dx of --fine-ensemble, mm")
     p.add_argument("--verification-fine", metavar="CSV", help="the fine-resolution rows (target verify_fine), "
                    "shown after the others when they have run")
     p.add_argument("--benchmarks", metavar="CSV|DIR", help="benchmark CSV, or a folder of Snakemake benchmark .tsv files")
@@ -198,3 +210,5 @@ def register(sub) -> None:
     p.set_defaults(func=_cmd_summary)
     sensitivity_table.register(sub)
     readme_status.register(sub)
+    from . import ensemble
+    ensemble.register(sub)

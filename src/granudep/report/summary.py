@@ -19,7 +19,7 @@ from .._version import __version__
 from .da_vs_reference import PAPER_MAX_ERRORS, improvement, max_errors
 from .markdown import md_table, not_available, pct_mean, read_csv
 from .studies import section_convergence, section_sensitivity
-from ..verification_gate import FAIL, PASS, REPORTED, count, statuses
+from ..verification_gate import FAIL, PASS, REPORTED, chain_dx_lines, count, statuses
 from .readme_status import variant_lines
 from .claims import tally
 from .da_readings import pivot_markdown
@@ -191,6 +191,26 @@ def section_variants(results) -> str:
                       *[f"- {line}" for line in lines], ""])
 
 
+def section_ensemble(path) -> str:
+    """Per 2D case: fronts and both rest times over the ensemble members (granudep ensemble --quantities)."""
+    out = ["## Ensembles: fronts and rest times of every 2D case over its members\n"]
+    df = read_csv(path) if path else None
+    if df is None or df.empty:
+        return "\n".join(out) + "Not available: one member per case (config ensemble.members = 1) or `results/ensemble/` " \
+            "not built.\n"
+    df = df.copy()
+    df["spread_pct"] = 100 * (df["max"] - df["min"]) / df["mean"].abs()
+    df["dx_mm"] = 1e3 * df["dx"]
+    out.append(f"Source: `{path}`. Member 0 is the lattice, the others start with every position moved by 0.01 dx; "
+               "spread = (max − min) / mean. A difference between two cases or two settings smaller than the spread "
+               "is not a finding.\n")
+    out.append(md_table(df, {"case": ("case", ""), "quantity": ("quantity", ""), "n": ("n", ""), "mean": ("mean", ".3f"),
+                             "min": ("min", ".3f"), "max": ("max", ".3f"), "std": ("std", ".3f"),
+                             "spread_pct": ("spread %", ".1f"), "member0": ("member 0", ".3f"), "dx_mm": ("dx (mm)", ".3g")}))
+    out.append("")
+    return "\n".join(out)
+
+
 def section_claims(card: pd.DataFrame | None) -> str:
     """The claims scorecard (granudep.report.claims.scorecard)."""
     out = ["## Claims scorecard: every quantitative claim of the paper\n"]
@@ -201,6 +221,20 @@ def section_claims(card: pd.DataFrame | None) -> str:
                "in the last column. Verdict on the converged value where it exists (its dx in column 'dx'), else on "
                "the paper-resolution one; test and tolerance as listed (fixed before reading our numbers). "
                "'–' in 'ours converged': not run.\n")
+    if "ours_std" in card:
+        out.append("Ours is the **ensemble mean** over the members (column 'n'; member 0 the lattice, the others "
+                   "jittered by 0.01 dx), with min–max and std. Verdict: *reproduced* when the paper's value is within "
+                   "the tolerance of our mean and both the members' spread (max − min) and the change of the mean "
+                   "to the finer ensemble (where one has run, column 'fine') are within it; *indeterminate* when "
+                   "the spread or the dx change exceeds the tolerance; else *not reproduced*.\n")
+        out.append(md_table(card, {"claim_id": ("id", ""), "case": ("case", ""), "paper_value": ("paper", ".4g"),
+                                   "ours_paper_res": ("ours (mean)", ".4g"), "ours_min": ("min", ".4g"),
+                                   "ours_max": ("max", ".4g"), "ours_std": ("std", ".3g"), "members": ("n", ""),
+                                   "ours_fine": ("fine (mean)", ".4g"), "fine_dx_mm": ("fine dx (mm)", ".3g"),
+                                   "verdict": ("verdict", ""), "test": ("test", ""), "tolerance": ("tol.", ".3g"),
+                                   "note": ("measured cause / note", ""), "source": ("paper source", "")}))
+        out.append("")
+        return "\n".join(out)
     out.append(md_table(card, {"claim_id": ("id", ""), "claim": ("claim", ""), "case": ("case", ""),
                                "paper_value": ("paper", ".4g"), "ours_paper_res": ("ours (paper res.)", ".4g"),
                                "ours_converged": ("ours (converged)", ".4g"), "converged_dx_mm": ("dx (mm)", ".3g"),
@@ -235,26 +269,6 @@ def section_regression_diagnosis(path) -> str:
                                "note": ("note", "")}))
     out.append("")
     return "\n".join(out)
-
-
-def chain_dx_lines(table: pd.DataFrame, chain_dx_mm: float = 4.0) -> list[str]:
-    """'bagnold: 0.026 at 1 mm (checked, pass), 0.2 at 4 mm (the chain's dx, reported)' per checked
-    row of ``table`` whose quantity the suite also measures at the chain's dx, and the count of
-    checked rows at the chain's dx."""
-    from ..verification_gate import chain_dx_pairs, checked_at_dx, pair_key
-    if not {"check", "quantity", "error", "tolerance"} <= set(table.columns):
-        return []
-    out = []
-    for r in chain_dx_pairs(table, chain_dx_mm).itertuples():
-        unit = " m/s" if "m/s" in r.quantity else ""
-        fmt = (lambda e: f"{e:.3f}{unit}") if unit else (lambda e: f"{100 * e:.1f} %")
-        what = pair_key(r.check, r.quantity).split("\t")[1]
-        out.append(f"`{r.check}` ({what}): "
-                   f"{fmt(r.error)} at {r.dx_mm:g} mm (checked, {r.status}), {fmt(r.chain_error)} at "
-                   f"{r.chain_dx_mm:g} mm (the chain's dx, {r.chain_status})")
-    if out:
-        out.append(f"{checked_at_dx(table, chain_dx_mm)} of {count(table).checked} checked rows are at the chain's dx")
-    return out
 
 
 def section_verification(paths) -> str:
@@ -400,7 +414,7 @@ def section_da_readings(path) -> str:
 def build_summary(regression=None, compare=None, verification=(), benchmarks=None, figures=None,
                   output=None, convergence=None, sensitivity=None, convergence_dx=None,
                   convergence_n=None, matrix=None, maxima=None, claims=None, diagnosis=None, captions=None,
-                  results=None, da_readings=None) -> str:
+                  results=None, da_readings=None, ensemble=None) -> str:
     """The Markdown summary text (see module docstring); ``results``: the results folder, whose
     ``variants/`` chains are shown beside the claims scorecard."""
     out_dir = Path(output).parent if output is not None else None
@@ -415,6 +429,7 @@ def build_summary(regression=None, compare=None, verification=(), benchmarks=Non
         "against Farin et al. (2014) measurements, which are not available to us.\n",
         section_claims(claims),
         section_variants(results),
+        section_ensemble(ensemble),
         section_table3(regression),
         section_table5(regression),
         section_regression_diagnosis(diagnosis),
