@@ -90,7 +90,10 @@ def test_project_readme_has_one_block():
 def test_table3_is_also_given_per_slope_angle(results):
     pd.DataFrame({"case": ["T10-A35", "T22-A70", "T22-A70"], "rel_diff_pct": [4.0, 10.0, -30.0],
                   "rel_diff_fit_pct": [1.0, 5.0, 15.0]}).to_csv(results / "regression/table3_comparison.csv", index=False)
-    assert "onset per slope: 10°: 4.0 %, 22°: 20.0 %." in status_block(results)
+    block = status_block(results)
+    assert "onset per slope: 10°: 4.0 %, 22°: 20.0 %;" in block
+    # the validation figure leaves out the calibration case (T22-A70): only T10-A35 counts
+    assert "4.0 % over the 1 case other than T22-A70." in block
 
 
 def test_a_variant_chain_gets_its_own_line(results):
@@ -105,6 +108,26 @@ def test_a_variant_chain_gets_its_own_line(results):
     (results / "variants" / "unfinished").mkdir()
     block = status_block(results)
     line = [ln for ln in block.splitlines() if "Variant `no-slip`" in ln][0]
-    assert "claims: 1 reproduced, 0 indeterminate, 1 not reproduced, 0 not checkable of 2" in line and "45.0 % (onset; 16°: 40.0 %, 22°: 50.0 %)" in line
+    assert "claims: 1 reproduced, 0 indeterminate, 1 not reproduced, 0 not checkable of 2" in line and "45.0 % (onset; 16°: 40.0 %, 22°: 50.0 %" in line
+    assert "40.0 % over the 1 case other than T22-A70" in line and "calibrated on" not in line
     assert "t_s T22-A70 18.2" in line and "config/variants/no-slip.yaml" in line
     assert "Variant `unfinished`" in block and "has not finished" in block
+
+
+def test_the_calibrated_variant_says_what_was_calibrated_and_scores_the_other_cases(results):
+    v = results / "variants" / "calibrated"
+    (v / "regression").mkdir(parents=True)
+    pd.DataFrame({"claim_id": ["x"], "case": ["T22-A70"], "paper_value": [1.0], "ours_paper_res": [1.0],
+                  "verdict": ["reproduced"]}).to_csv(v / "claims.csv", index=False)
+    # the calibration case fits (2 %), the validation cases do not (30 %, 10 %): the held-out mean is theirs
+    pd.DataFrame({"case": ["T22-A70", "T22-A70", "T16-A50", "T22-A150"], "rel_diff_pct": [2.0, -2.0, -30.0, 10.0]}
+                 ).to_csv(v / "regression/table3_comparison.csv", index=False)
+    (results / "calibration").mkdir()
+    pd.DataFrame({"case": ["T22-A70"], "slip_length_mm": [5.1], "range_min_mm": [5.06], "range_max_mm": [5.91],
+                  "members": [3], "objective_min": [0.0086], "scan_points": [15]}
+                 ).to_csv(results / "calibration/result.csv", index=False)
+    line = [ln for ln in status_block(results).splitlines() if "Variant `calibrated`" in ln][0]
+    assert "L_s calibrated on the T22-A70 row of Table 3; every other number is a prediction" in line
+    assert "20.0 % over the 2 cases other than T22-A70" in line
+    assert "L_s = 5.10 mm (member minimisers 5.06–5.91 mm" in line
+

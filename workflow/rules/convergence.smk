@@ -95,9 +95,10 @@ rule figure_convergence:
 
 
 rule convergence:
-    """Target: every convergence run and its figure."""
+    """Target: every convergence run and its figure, and the convergence ensembles' table."""
     input:
         f"{RESULTS}/figures/convergence.png",
+        f"{RESULTS}/convergence/ensemble_table.csv",
 
 
 # --- Reference runs: the four Table 5 geometries at 22° and T22-A70 at the reference dx ---
@@ -119,3 +120,127 @@ rule reference_runs:
     """Target: the 2D reference runs at convergence.reference_dx (not part of `all`)."""
     input:
         expand(f"{RESULTS}/reference/isph/{{case}}_dx{{dx}}.nc", case=REF_CASES, dx=[REF_DX]),
+
+
+# --- Convergence with the spread beside it: ensembles at a finer dx and one lattice run finer still ---
+# Member k of case c at dx d lives in results/convergence/ensemble/dx{d}/m{k}/ (the layout of a chain's
+# results folder, so `granudep ensemble` reads it as it reads the chain's members). The chain's own
+# ensembles (results/ensemble/quantities.csv) are the coarse level.
+CONV_ENS_CASES = CONV.get("ensemble_cases", [])
+CONV_ENS_DX = CONV.get("ensemble_dx", 0.002)
+CONV_SINGLE_DX = CONV.get("single_dx", 0.0014)
+CONV_ENS_DIR = f"{CONV_DIR}/ensemble"
+
+
+def conv_member_root(dx, k):
+    return f"{CONV_ENS_DIR}/dx{dx}/m{k}"
+
+
+def conv_level_members(dx):
+    """Member ids at dx: the ensemble's at ensemble_dx, member 0 alone at single_dx."""
+    return MEMBER_IDS if float(dx) == float(CONV_ENS_DX) else [0]
+
+
+use rule isph_member as conv_member_isph with:
+    output:
+        f"{CONV_ENS_DIR}/dx{{dx}}/m{{member}}/isph/{{case}}.nc",
+    params:
+        dx=lambda wc: wc.dx,
+        t_end=lambda wc: f"--t-end {config['isph']['t_end']}" if config["isph"].get("t_end") else "",
+        set=lambda wc: " ".join(o for o in (isph_set_options(), member_set_options(wc.member)) if o),
+    log:
+        f"{CONV_ENS_DIR}/dx{{dx}}/m{{member}}/logs/isph/{{case}}.log",
+    benchmark:
+        f"{BENCH}/convergence/ensemble/dx{{dx}}/m{{member}}/isph/{{case}}.tsv"
+    wildcard_constraints:
+        case="|".join(re.escape(c) for c in CONV_ENS_CASES) or "^$",
+        dx="[0-9.]+",
+        member="[0-9]+",
+    resources:
+        runtime=480,
+        mem_mb=8000,
+
+
+use rule monitor as conv_member_monitor with:
+    input:
+        warm=WARM,
+        run=f"{CONV_ENS_DIR}/dx{{dx}}/m{{member}}/isph/{{case}}.nc",
+    output:
+        f"{CONV_ENS_DIR}/dx{{dx}}/m{{member}}/sections/{{case}}.nc",
+    log:
+        f"{CONV_ENS_DIR}/dx{{dx}}/m{{member}}/logs/sections/{{case}}.log",
+    benchmark:
+        f"{BENCH}/convergence/ensemble/dx{{dx}}/m{{member}}/sections/{{case}}.tsv"
+    wildcard_constraints:
+        member="[0-9]+",  # member 0 (the lattice) has a folder of its own here
+
+
+use rule regress as conv_member_regress with:
+    input:
+        sections=lambda wc: [f"{conv_member_root(wc.dx, wc.member)}/sections/{c}.nc" for c in CONV_ENS_CASES],
+    output:
+        **{k: f"{CONV_ENS_DIR}/dx{{dx}}/m{{member}}/regression/{os.path.basename(v)}" for k, v in zip(
+            ("critical", "coefficients", "coefficients_nc", "table3", "table5"), REGRESSION_OUTPUTS)},
+    params:
+        outdir=lambda wc: f"{conv_member_root(wc.dx, wc.member)}/regression",
+    log:
+        f"{CONV_ENS_DIR}/dx{{dx}}/m{{member}}/logs/regress.log",
+    benchmark:
+        f"{BENCH}/convergence/ensemble/dx{{dx}}/m{{member}}/regress.tsv"
+    wildcard_constraints:
+        member="[0-9]+",  # member 0 (the lattice) has a folder of its own here
+
+
+rule conv_ensemble:
+    """The members' claims and per-case numbers at one dx of the convergence ensembles."""
+    input:
+        runs=lambda wc: [f"{conv_member_root(wc.dx, k)}/isph/{c}.nc" for k in conv_level_members(wc.dx)
+                         for c in CONV_ENS_CASES],
+        regression=lambda wc: [f"{conv_member_root(wc.dx, k)}/regression/table3_comparison.csv"
+                               for k in conv_level_members(wc.dx)],
+    output:
+        claims=f"{CONV_ENS_DIR}/dx{{dx}}/claims_members.csv",
+        quantities=f"{CONV_ENS_DIR}/dx{{dx}}/quantities.csv",
+    params:
+        roots=lambda wc: " ".join(conv_member_root(wc.dx, k) for k in conv_level_members(wc.dx)),
+        cases=" ".join(CONV_ENS_CASES),
+    log:
+        f"{LOGS}/convergence/ensemble_dx{{dx}}.log",
+    benchmark:
+        f"{BENCH}/convergence/ensemble_dx{{dx}}.tsv"
+    wildcard_constraints:
+        dx="[0-9.]+",
+    threads: 1
+    shell:
+        "granudep ensemble {params.roots} --cases {params.cases} -o {output.claims} --quantities {output.quantities}"
+        " > {log} 2>&1"
+
+
+CONV_ENS_TABLE = f"{CONV_DIR}/ensemble_table.csv"
+CONV_FINE_CLAIMS = f"{CONV_ENS_DIR}/dx{CONV_ENS_DX}/claims_members.csv"
+
+
+rule convergence_ensemble_table:
+    input:
+        coarse=f"{MEMBERS}/quantities.csv",
+        levels=[f"{CONV_ENS_DIR}/dx{d}/quantities.csv" for d in (CONV_ENS_DX, CONV_SINGLE_DX)],
+    output:
+        table=CONV_ENS_TABLE,
+        robust=f"{CONV_DIR}/robust_rest.csv",
+    params:
+        threshold=CONV.get("well_defined_pct", 10),
+    log:
+        f"{LOGS}/convergence/ensemble_table.log",
+    benchmark:
+        f"{BENCH}/convergence/ensemble_table.tsv"
+    threads: 1
+    shell:
+        "granudep convergence-table {input.coarse} {input.levels} -o {output.table} --robust {output.robust}"
+        " --threshold-pct {params.threshold} > {log} 2>&1"
+
+
+rule convergence_ensemble:
+    """Target: the convergence ensembles and their table (also part of `convergence`)."""
+    input:
+        CONV_ENS_TABLE,
+        CONV_FINE_CLAIMS,

@@ -13,6 +13,17 @@ STUDY_FIGURES = {"convergence": f"{RESULTS}/figures/convergence.png",
 CAPTIONS_DIR = os.path.join(os.path.dirname(os.path.abspath(workflow.main_snakefile)), "workflow", "report")
 
 
+# optional summary inputs (the studies beyond `all`): path -> the `granudep summary` option that reads it
+_FINE_DX = config["convergence"].get("ensemble_dx", 0.002)
+SUMMARY_OPTIONAL = {
+    f"{RESULTS}/compare/da_readings.csv": "--da-readings {}",
+    f"{RESULTS}/verification/isph_fine.csv": "--verification-fine {}",
+    f"{RESULTS}/convergence/ensemble_table.csv": "--ensemble-convergence {}",
+    f"{RESULTS}/convergence/robust_rest.csv": "--robust-rest {}",
+    f"{RESULTS}/convergence/ensemble/dx{_FINE_DX}/claims_members.csv": f"--fine-ensemble {{}} --fine-dx-mm {1e3 * float(_FINE_DX):g}",
+}
+
+
 def _summary_figure_args(wc, input):
     """--figures NAME=PATH for every figure given to the summary (the studies' only when on disk)."""
     named = [(n, p) for n, p in SUMMARY_FIGURES.items()] + [(n, p) for n, p in STUDY_FIGURES.items()
@@ -39,9 +50,9 @@ rule summary:
         # summary says "not available" and names the target
         studies=lambda wc: [p for p in (f"{RESULTS}/figures/convergence.png", f"{RESULTS}/figures/sensitivity.png")
                             if os.path.exists(p)],
-        # the same for the study `snakemake -j2 da_readings` and the target `verify_fine`
-        optional=lambda wc: [p for p in (f"{RESULTS}/compare/da_readings.csv", f"{RESULTS}/verification/isph_fine.csv")
-                             if os.path.exists(p)],
+        # the same for the study `snakemake -j2 da_readings`, the target `verify_fine` and the
+        # convergence ensembles (`snakemake -j2 convergence_ensemble`)
+        optional=lambda wc: [p for p in SUMMARY_OPTIONAL if os.path.exists(p)],
     output:
         md=report(f"{RESULTS}/summary.md", category="Summary"),
         # the same text rendered: the Snakemake report shows an HTML result inline (a .md only as a download)
@@ -62,8 +73,7 @@ rule summary:
         converged=f"--converged-regression {CONVERGED_REGRESSION}" if CONVERGED_RUNS else "",
         ensemble=lambda wc, input: (f"--ensemble {input.ensemble[0]} --ensemble-quantities {input.ensemble[1]}"
                                     if input.ensemble else ""),
-        optional=lambda wc, input: " ".join(
-            f"{'--da-readings' if p.endswith('da_readings.csv') else '--verification-fine'} {p}" for p in input.optional),
+        optional=lambda wc, input: " ".join(SUMMARY_OPTIONAL[p].format(p) for p in input.optional),
         figures=_summary_figure_args,
         captions=os.path.relpath(CAPTIONS_DIR),
     log:

@@ -98,6 +98,7 @@ def _cmd_summary(args) -> int:
                          convergence_dx=args.convergence_dx, convergence_n=args.convergence_n,
                          matrix=args.matrix, maxima=args.maxima, claims=card, diagnosis=args.diagnosis,
                          da_readings=args.da_readings, ensemble=args.ensemble_quantities,
+                         ensemble_convergence=args.ensemble_convergence, robust_rest=args.robust_rest,
                          captions=args.captions, results=args.results)
     write_text(text, args.output)
     LOG.info("summary written to %s", args.output)
@@ -200,7 +201,11 @@ def register(sub) -> None:
                    "(granudep ensemble --quantities)")
     p.add_argument("--fine-ensemble", metavar="CSV", help="the same members' claim values at a finer dx (the dx "
                    "change of each claim)")
-    p.add_argument("--fine-dx-mm", type=float, default=float("nan"), help="dx of --fine-ensemble, mm")
+    p.add_argument("--fine-dx-mm", type=_positive_float, default=float("nan"), help="dx of --fine-ensemble, mm")
+    p.add_argument("--ensemble-convergence", metavar="CSV", help="the convergence ensembles' table "
+                   "(granudep convergence-table -o)")
+    p.add_argument("--robust-rest", metavar="CSV", help="the robust rest measure per case "
+                   "(granudep convergence-table --robust)")
     p.add_argument("--verification-fine", metavar="CSV", help="the fine-resolution rows (target verify_fine), "
                    "shown after the others when they have run")
     p.add_argument("--benchmarks", metavar="CSV|DIR", help="benchmark CSV, or a folder of Snakemake benchmark .tsv files")
@@ -210,5 +215,6 @@ def register(sub) -> None:
     p.set_defaults(func=_cmd_summary)
     sensitivity_table.register(sub)
     readme_status.register(sub)
-    from . import ensemble
+    from . import ensemble, ensemble_convergence
     ensemble.register(sub)
+    ensemble_convergence.register(sub)

@@ -127,7 +127,8 @@ def _tables(root: Path) -> list[str]:
         m = t3["rel_diff_pct"].abs().mean()
         mf = t3["rel_diff_fit_pct"].abs().mean() if "rel_diff_fit_pct" in t3 else math.nan
         out.append(f"**Table 3** critical times: mean |difference| {m:.1f} % (onset) and {mf:.1f} % (fit "
-                   f"intercept) over {len(t3)} (case, [x]) pairs; onset per slope: {table3_by_angle(t3)}.")
+                   f"intercept) over {len(t3)} (case, [x]) pairs; onset per slope: {table3_by_angle(t3)}; "
+                   f"{table3_validation(t3, calibration_case(root))}.")
     t5 = _csv(root / "regression" / "table5_comparison.csv")
     if t5 is None:
         out.append(f"**Table 5** A and B: {_missing('regression/table5_comparison.csv')}.")
@@ -183,6 +184,35 @@ def table3_by_angle(t3: pd.DataFrame, column: str = "rel_diff_pct") -> str:
     return ", ".join(parts)
 
 
+CALIBRATED_SENTENCE = "L_s calibrated on the T22-A70 row of Table 3; every other number is a prediction"
+
+
+def calibration_case(root: Path) -> str:
+    """The case the slip length was calibrated on (``root/calibration/result.csv``; T22-A70, the declared
+    observable, when the calibration has not been run here)."""
+    res = _csv(root / "calibration" / "result.csv")
+    return str(res["case"].iloc[0]) if res is not None and len(res) else "T22-A70"
+
+
+def table3_validation(t3: pd.DataFrame, held_out: str) -> str:
+    """Table 3 mean |difference| (onset) over the cases other than ``held_out`` (the calibration case):
+    the validation figure of a chain whose slip length was chosen on ``held_out``."""
+    if "case" not in t3:
+        return "per-case validation figure not available (no case column)"
+    rest = t3[t3["case"].astype(str) != held_out]
+    n = rest["case"].nunique()
+    return f"{rest['rel_diff_pct'].abs().mean():.1f} % over the {n} case{'' if n == 1 else 's'} other than {held_out}"
+
+
+def _calibration(root: Path) -> str:
+    res = _csv(root / "calibration" / "result.csv")
+    if res is None or not len(res):
+        return ""
+    r = res.iloc[0]
+    return (f" Calibrated L_s = {r.slip_length_mm:.2f} mm (member minimisers {r.range_min_mm:.2f}–{r.range_max_mm:.2f} mm, "
+            f"{int(r.members)} members, {int(r.scan_points)} scan points; `results/calibration/result.csv`).")
+
+
 def variant_lines(root: Path) -> list[str]:
     """One line per variant chain found under ``root/variants/<name>`` (config/variants/<name>.yaml,
     run with its own results_dir): its claims tally, Table 3 agreement and rest times, read from its
@@ -200,14 +230,15 @@ def variant_lines(root: Path) -> list[str]:
         t3 = _csv(vdir / "regression" / "table3_comparison.csv")
         if t3 is not None:
             parts.append(f"Table 3 mean |difference| {t3['rel_diff_pct'].abs().mean():.1f} % (onset; "
-                         f"{table3_by_angle(t3)})")
+                         f"{table3_by_angle(t3)}; {table3_validation(t3, calibration_case(root))})")
         rest = card.set_index("claim_id")
         rest = rest[rest.index.str.startswith("rest_time_")]
         if len(rest):
             parts.append("t_s " + ", ".join(f"{case} {_with_spread(rest.iloc[i], '.1f')}"
                                             for i, case in enumerate(rest["case"])))
+        note = f" {CALIBRATED_SENTENCE}.{_calibration(root)}" if vdir.name == "calibrated" else ""
         out.append(f"**Variant `{vdir.name}`** (`config/variants/{vdir.name}.yaml`, outputs in "
-                   f"`{vdir.as_posix()}`): " + "; ".join(parts) + ".")
+                   f"`{vdir.as_posix()}`): " + "; ".join(parts) + "." + note)
     return out
 
 

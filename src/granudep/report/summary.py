@@ -211,6 +211,32 @@ def section_ensemble(path) -> str:
     return "\n".join(out)
 
 
+def section_ensemble_convergence(path, robust=None) -> str:
+    """Per case and quantity: the ensemble mean and spread at the chain's dx and at a finer dx, the dx
+    change, a single finer run and the observed order (granudep convergence-table)."""
+    from .ensemble_convergence import markdown
+    out = ["## Ensembles at two resolutions: the spread beside the dx change\n"]
+    df = read_csv(path) if path else None
+    if df is None or df.empty:
+        return "\n".join(out) + "Not available: `snakemake -j2 convergence_ensemble` has not run.\n"
+    out.append(f"Source: `{path}`. Spread = (max − min) / mean of the members; dx change = change of the "
+               "ensemble mean from the chain's dx to the finer ensemble. A quantity is *well-defined* when both "
+               "are within the threshold (`convergence.well_defined_pct`); a dx change smaller than the spread "
+               "is not a finding. The observed order uses the two ensemble means and one lattice run at the "
+               "finest dx.\n")
+    out.append(markdown(df))
+    rob = read_csv(robust) if robust else None
+    if rob is not None and not rob.empty:
+        out.append("")
+        out.append("Robust rest measure per case (the smaller of max(spread, |dx change|), chosen by those two "
+                   "figures alone): " + "; ".join(
+                       f"{r.case}: `{r.robust}` (" + ", ".join(f"{c[6:-4]} {getattr(r, c):.1f} %" for c in rob.columns
+                                                          if c.startswith("worst_") and pd.notna(getattr(r, c))) + ")"
+                       for r in rob.itertuples()) + ".")
+    out.append("")
+    return "\n".join(out)
+
+
 def section_claims(card: pd.DataFrame | None) -> str:
     """The claims scorecard (granudep.report.claims.scorecard)."""
     out = ["## Claims scorecard: every quantitative claim of the paper\n"]
@@ -414,7 +440,8 @@ def section_da_readings(path) -> str:
 def build_summary(regression=None, compare=None, verification=(), benchmarks=None, figures=None,
                   output=None, convergence=None, sensitivity=None, convergence_dx=None,
                   convergence_n=None, matrix=None, maxima=None, claims=None, diagnosis=None, captions=None,
-                  results=None, da_readings=None, ensemble=None) -> str:
+                  results=None, da_readings=None, ensemble=None, ensemble_convergence=None,
+                  robust_rest=None) -> str:
     """The Markdown summary text (see module docstring); ``results``: the results folder, whose
     ``variants/`` chains are shown beside the claims scorecard."""
     out_dir = Path(output).parent if output is not None else None
@@ -430,6 +457,7 @@ def build_summary(regression=None, compare=None, verification=(), benchmarks=Non
         section_claims(claims),
         section_variants(results),
         section_ensemble(ensemble),
+        section_ensemble_convergence(ensemble_convergence, robust_rest),
         section_table3(regression),
         section_table5(regression),
         section_regression_diagnosis(diagnosis),
