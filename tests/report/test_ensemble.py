@@ -27,6 +27,9 @@ def _s(values):
     ([9.0, 10.5, 11.2], math.nan, "indeterminate"),       # spread 2.2 > 1
     ([10.0, 10.2, 9.9], 11.4, "indeterminate"),           # dx change +1.37 > 1
     ([13.0, 13.2, 12.9], math.nan, "not reproduced"),     # mean 13 off by 30 %, spread small
+    ([11.0, 12.0, 12.6], math.nan, "indeterminate"),      # spread 1.6 > 1 and mean 11.87 within 1 + 1.6 of 10
+    ([59.0, 61.0, 60.5], math.nan, "not reproduced"),     # spread 2 > 1, but 60 lies 50 away: beyond 1 + 2
+    ([20.0, 20.1, 19.9], 10.2, "indeterminate"),          # 2x off, but the finer mean (dx change -9.8) is within reach
 ])
 def test_two_sided_verdicts(values, fine, expected):
     v, why = ens.ensemble_verdict("rel", 10.0, 0.1, _s(values), values, fine)

@@ -10,8 +10,11 @@ count, the change of the mean from the chain's dx to a finer ensemble where one 
 
 * ``reproduced``: the paper's value within the tolerance of our mean, and both the spread (max − min
   of the members) and the dx change (where measured) within the tolerance;
-* ``indeterminate``: the spread or the dx change exceeds the tolerance (the note gives the figure);
-* ``not reproduced``: otherwise; ``not checkable`` when no member has the number.
+* ``indeterminate``: the spread or the dx change exceeds the tolerance (the note gives the figure), and
+  the paper's value lies within the tolerance plus that figure of our mean (the uncertainty could
+  bring it within reach);
+* ``not reproduced``: otherwise (also when the spread or the dx change is wide but the paper's value
+  lies beyond the tolerance plus it); ``not checkable`` when no member has the number.
 
 For the one-sided claims (``lt``/``gt``) "within the tolerance" means: every member on the same side of
 the bound, and the finer mean on the same side as ours.
@@ -111,11 +114,17 @@ def ensemble_verdict(test: str, paper: float, tol: float, s: dict, members, fine
     central = verdict(s["mean"], paper, test, tol)
     change = fine_mean - s["mean"] if math.isfinite(fine_mean) else math.nan
     if math.isfinite(width):
-        spread = s["max"] - s["min"]
-        if s["n"] > 1 and spread > width:
-            return "indeterminate", f"spread {spread:.3g} > tolerance {width:.3g}"
-        if math.isfinite(change) and abs(change) > width:
-            return "indeterminate", f"dx change {change:+.3g} > tolerance {width:.3g}"
+        spread = s["max"] - s["min"] if s["n"] > 1 else 0.0
+        dxc = abs(change) if math.isfinite(change) else 0.0
+        if spread > width or dxc > width:
+            figure = (f"spread {spread:.3g}" if spread >= dxc else f"dx change {change:+.3g}") + f" > tolerance {width:.3g}"
+            distance = abs(s["mean"] - float(paper))
+            if distance > width + max(spread, dxc):
+                # the uncertainty is wide, but not wide enough to bring the paper's value within reach
+                return "not reproduced", (f"{figure}, but the paper's value is {distance:.3g} from our mean, beyond "
+                                          f"tolerance + {'spread' if spread >= dxc else 'dx change'} "
+                                          f"({width + max(spread, dxc):.3g})")
+            return "indeterminate", figure
         return central, ""
     sides = {verdict(v, paper, test, tol) for v in members if math.isfinite(float(v))}
     if len(sides) > 1:
