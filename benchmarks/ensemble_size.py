@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import subprocess
+import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -30,9 +31,10 @@ def member(workdir: Path, case: str, dx: float, k: int, jitter: float) -> Path:
     run, sec, reg = root / "isph" / f"{case}.nc", root / "sections" / f"{case}.nc", root / "regression"
     sets = ["--set", f"numerics.seed={k}", "--set", f"numerics.jitter={jitter}"] if k else []
     env = {"NUMBA_NUM_THREADS": "1"}
-    steps = [(run, ["granudep", "isph", case, "--dx", str(dx), *sets, "-o", str(run)]),
-             (sec, ["granudep", "monitor", str(run), "-o", str(sec)]),
-             (reg / "critical.csv", ["granudep", "regress", str(sec), "-o", str(reg)])]
+    gd = [sys.executable, "-m", "granudep"]
+    steps = [(run, [*gd, "isph", case, "--dx", str(dx), *sets, "-o", str(run)]),
+             (sec, [*gd, "monitor", str(run), "-o", str(sec)]),
+             (reg / "critical.csv", [*gd, "regress", str(sec), "-o", str(reg)])]
     for out, cmd in steps:
         if not out.exists():
             out.parent.mkdir(parents=True, exist_ok=True)

@@ -127,6 +127,7 @@ rule reference_runs:
 # results folder, so `granudep ensemble` reads it as it reads the chain's members). The chain's own
 # ensembles (results/ensemble/quantities.csv) are the coarse level.
 CONV_ENS_CASES = CONV.get("ensemble_cases", [])
+CONV_SINGLE_CASES = CONV.get("single_cases", CONV_ENS_CASES)
 CONV_ENS_DX = CONV.get("ensemble_dx", 0.002)
 CONV_SINGLE_DX = CONV.get("single_dx", 0.0014)
 CONV_ENS_DIR = f"{CONV_DIR}/ensemble"
@@ -134,6 +135,11 @@ CONV_ENS_DIR = f"{CONV_DIR}/ensemble"
 
 def conv_member_root(dx, k):
     return f"{CONV_ENS_DIR}/dx{dx}/m{k}"
+
+
+def conv_level_cases(dx):
+    """The cases run at dx: every ensemble case at ensemble_dx, single_cases at single_dx."""
+    return CONV_ENS_CASES if float(dx) == float(CONV_ENS_DX) else CONV_SINGLE_CASES
 
 
 def conv_level_members(dx):
@@ -177,7 +183,7 @@ use rule monitor as conv_member_monitor with:
 
 use rule regress as conv_member_regress with:
     input:
-        sections=lambda wc: [f"{conv_member_root(wc.dx, wc.member)}/sections/{c}.nc" for c in CONV_ENS_CASES],
+        sections=lambda wc: [f"{conv_member_root(wc.dx, wc.member)}/sections/{c}.nc" for c in conv_level_cases(wc.dx)],
     output:
         **{k: f"{CONV_ENS_DIR}/dx{{dx}}/m{{member}}/regression/{os.path.basename(v)}" for k, v in zip(
             ("critical", "coefficients", "coefficients_nc", "table3", "table5"), REGRESSION_OUTPUTS)},
@@ -195,7 +201,7 @@ rule conv_ensemble:
     """The members' claims and per-case numbers at one dx of the convergence ensembles."""
     input:
         runs=lambda wc: [f"{conv_member_root(wc.dx, k)}/isph/{c}.nc" for k in conv_level_members(wc.dx)
-                         for c in CONV_ENS_CASES],
+                         for c in conv_level_cases(wc.dx)],
         regression=lambda wc: [f"{conv_member_root(wc.dx, k)}/regression/table3_comparison.csv"
                                for k in conv_level_members(wc.dx)],
     output:
@@ -203,7 +209,7 @@ rule conv_ensemble:
         quantities=f"{CONV_ENS_DIR}/dx{{dx}}/quantities.csv",
     params:
         roots=lambda wc: " ".join(conv_member_root(wc.dx, k) for k in conv_level_members(wc.dx)),
-        cases=" ".join(CONV_ENS_CASES),
+        cases=lambda wc: " ".join(conv_level_cases(wc.dx)),
     log:
         f"{LOGS}/convergence/ensemble_dx{{dx}}.log",
     benchmark:
