@@ -12,7 +12,7 @@ from granudep.da.config import resolve
 from granudep.isph.config import load_config
 
 
-# --- item 1: a paper case name survives no change of geometry or material ------------------------
+# --- a paper case name survives no change of geometry or material --------------------------------
 @pytest.mark.parametrize("overrides, key", [
     ({"theta_deg": 16.0}, "geometry.theta_deg"),
     ({"H0": 0.05}, "geometry.H0"),
@@ -55,7 +55,7 @@ def test_da_ab_source_paper_refused_for_a_changed_geometry(tmp_path):
         resolve(f)
 
 
-# --- item 2: granudep.monitor stays callable -------------------------------------------------------
+# --- granudep.monitor stays callable ---------------------------------------------------------------
 def test_monitor_entry_point_survives_subpackage_imports():
     code = ("import granudep, importlib; importlib.import_module('granudep.monitor.api');"
             "importlib.import_module('granudep.monitor.cli'); import granudep.monitor.sections;"
@@ -64,7 +64,7 @@ def test_monitor_entry_point_survives_subpackage_imports():
 
 
 
-# --- item 3: section overrides in run_da and run_isph ----------------------------------------------
+# --- section overrides in run_da and run_isph ------------------------------------------------------
 def test_resolve_takes_the_deposition_section():
     cfg = resolve("1D-A70", deposition={"ab_source": "user", "A": -0.1, "B": 0.1})
     assert cfg.deposition.enabled and cfg.deposition.ab_source == "user" and cfg.deposition.A == -0.1
@@ -99,7 +99,7 @@ def test_isph_section_overrides():
         load_config("T22-A70", numerics=0.01)
 
 
-# --- item 7: impossible inputs ------------------------------------------------------------------
+# --- impossible inputs --------------------------------------------------------------------------
 def test_isph_slope_steeper_than_friction_is_refused():
     with pytest.raises(ConfigError, match=r"^geometry.theta_deg: must be < material.phi_internal_deg = 25.5"):
         load_config({"case": "steep", "geometry": {"theta_deg": 30.0}})
@@ -145,7 +145,7 @@ def test_non_utf8_yaml_is_one_line(tmp_path):
     assert "\n" not in str(exc.value)
 
 
-# --- item 13: YAML 1.2 numbers ---------------------------------------------------------------------
+# --- YAML 1.2 numbers ------------------------------------------------------------------------------
 def test_yaml_reads_numbers_as_yaml_1_2(tmp_path):
     f = tmp_path / "n.yaml"
     f.write_text("a: 5.0e4\nb: 1e-3\nc: -2E+2\nd: 1\ne: '5.0e4'\nf: 0.5\ng: 1.5e3x\n")
@@ -178,7 +178,7 @@ def test_monitor_called_twice_in_one_session():
     assert a.sizes["section"] == b.sizes["section"] == 11 and b.attrs["width_factor"] == 3.0
 
 
-# --- items 5, 8, 11: outputs checked before work; unreadable inputs one line -----------------------
+# --- outputs checked before work; unreadable inputs one line ---------------------------------------
 def _read_only_folder(tmp_path):
     """A folder nobody can write to (root ignores permissions: then /proc, which no one can)."""
     import os

@@ -46,9 +46,9 @@ def test_surface_band_is_continuous_at_the_edge_of_the_support():
 
 
 def test_shift_below_the_surface_loses_its_normal_part():
-    """Moving layer: with 'surface' (the session-3 scheme) the truncated support of the second layer
-    (∇C ≠ 0 one dx under the surface) pushes it up into the surface layer at every step; with the
-    band it is shifted along the surface only."""
+    """Moving layer: with 'surface' (the normal part removed on free-surface particles only) the
+    truncated support of the second layer (∇C ≠ 0 one dx under the surface) pushes it up into the
+    surface layer at every step; with the band it is shifted along the surface only."""
     dx = 0.002
     s = _layer(dx)
     pairs, gcx, gcy, fs = _layer_terms(s)

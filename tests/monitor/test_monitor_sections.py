@@ -60,7 +60,8 @@ def test_planted_interface_gives_exact_depths(h_ratio, m_deposit):
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_jittered_interface_within_one_spacing(seed):
-    # particles displaced by up to ±0.2 dx: h and h_D within one particle spacing (issue criterion)
+    # particles displaced by up to ±0.2 dx: h and h_D within one particle spacing (the
+    # resolution of a particle interface)
     ds = monitor(strip_run(n_rows=15, m_deposit=6, jitter=0.2, seed=seed))
     hd = ds.deposit_depth.isel(time=0).values
     h = ds.flow_depth.isel(time=0).values

@@ -1,4 +1,5 @@
-"""NetCDF dataset of a 2D ISPH run (data contract item 2): particle snapshots + front and energy."""
+"""NetCDF dataset of a 2D ISPH run (docs/data-contract.md, 2D ISPH run): particle snapshots + front
+and energy."""
 from __future__ import annotations
 
 import math
