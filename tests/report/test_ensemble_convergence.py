@@ -77,3 +77,11 @@ def test_the_summary_section_shows_the_table_and_names_the_target_when_absent(tm
     convergence_table([coarse, fine]).to_csv(tmp_path / "t.csv", index=False)
     text = section_ensemble_convergence(tmp_path / "t.csv")
     assert "| T22-A70 | time to rest, every particle" in text and "ill-conditioned: spread 38.0 %" in text
+
+
+def test_the_spread_of_the_finer_ensemble_counts_too():
+    # 4 mm members agree (2 %), 2 mm members scatter by 40 %: the quantity is not well-defined
+    coarse = _level(0.004, [("T22-A70", "rest_time", [20.0, 20.2, 20.4])])
+    fine = _level(0.002, [("T22-A70", "rest_time", [17.0, 20.0, 25.0])])
+    row = convergence_table([coarse, fine]).iloc[0]
+    assert row["verdict"].startswith("ill-conditioned: spread 38.")

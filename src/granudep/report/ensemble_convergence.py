@@ -4,8 +4,8 @@ whether the dx change exceeds the spread, and the observed order where the three
 
 Each level is a ``granudep ensemble --quantities`` table (case, quantity, n, mean, min, max, std,
 member0, dx). A quantity of a case is called *well-defined* at the chain's dx when both its ensemble
-spread ((max − min) / |mean|) and its change of the mean to the finer ensemble are within
-``threshold_pct``; otherwise the larger of the two figures is named. Among the rest measures the
+spread ((max − min) / |mean|, the larger of the two ensembles') and its change of the mean to the
+finer ensemble are within ``threshold_pct``; otherwise the larger of the two figures is named. Among the rest measures the
 *robust* one of a case is the one whose larger figure is smaller: chosen by spread and dx change,
 never by agreement with the paper.
 """
@@ -79,17 +79,18 @@ def convergence_table(levels: list[pd.DataFrame], threshold_pct: float = 10.0) -
                      "dx_single_mm": 1e3 * s["dx"] if s is not None else math.nan,
                      "single": s["mean"] if s is not None else math.nan,
                      "order": order["order"], "extrapolated": order["extrapolated"], "order_note": order["reason"],
-                     "verdict": _verdict(sc, change, threshold_pct)})
+                     "verdict": _verdict(max(sc, sf) if math.isfinite(sf) else sc, change, threshold_pct)})
     return pd.DataFrame(rows, columns=TABLE_COLUMNS)
 
 
 def robust_rest_measure(table: pd.DataFrame) -> pd.DataFrame:
-    """Per case: the rest measure (:data:`REST_MEASURES`) whose larger figure of spread and |dx change|
-    is smallest, with both figures of each measure."""
+    """Per case: the rest measure (:data:`REST_MEASURES`) whose largest figure of the two spreads and
+    |dx change| is smallest, with that figure of each measure."""
     rows = []
     rest = table[table["quantity"].isin(REST_MEASURES)]
     for case, g in rest.groupby("case", sort=False):
-        worst = {r.quantity: max(r.spread_coarse_pct, abs(r.change_pct) if math.isfinite(r.change_pct) else 0.0)
+        worst = {r.quantity: max(r.spread_coarse_pct, r.spread_fine_pct if math.isfinite(r.spread_fine_pct) else 0.0,
+                                 abs(r.change_pct) if math.isfinite(r.change_pct) else 0.0)
                  for r in g.itertuples()}
         worst = {k: v for k, v in worst.items() if math.isfinite(v)}
         if not worst:
@@ -120,12 +121,23 @@ def markdown(table: pd.DataFrame) -> str:
         return "No quantity at two resolutions."
     t = table.copy()
     t["quantity"] = t["quantity"].map(lambda q: QUANTITIES.get(q, (q,))[0])
+    t["order_text"] = [f"{o:.2f}" if math.isfinite(o) else _short_reason(n) for o, n in zip(t["order"], t["order_note"])]
     return md_table(t, {"case": ("case", ""), "quantity": ("quantity", ""),
                         "mean_coarse": ("mean, chain dx", ".3g"), "spread_coarse_pct": ("spread %", ".1f"),
                         "dx_fine_mm": ("finer dx (mm)", ".3g"), "mean_fine": ("mean, finer", ".3g"),
                         "spread_fine_pct": ("spread %", ".1f"), "change_pct": ("dx change %", "+.1f"),
                         "single": ("single, finest", ".3g"), "dx_single_mm": ("finest dx (mm)", ".3g"),
-                        "order": ("observed order", ".2f"), "verdict": ("verdict", "")})
+                        "order_text": ("observed order", ""), "verdict": ("verdict", "")})
+
+
+def _short_reason(note) -> str:
+    """The observed-order column when there is no order: why, in a few words."""
+    note = str(note)
+    for key, text in (("oscillating", "none (not monotone)"), ("no positive", "none (differences do not shrink)"),
+                      ("same value", "none (two levels equal)"), ("three levels", "– (two levels)")):
+        if key in note:
+            return text
+    return "–"
 
 
 def _cmd(args) -> int:
