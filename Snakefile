@@ -66,6 +66,11 @@ onsuccess:
         from granudep.report.run_record import write_run_record
 
         write_run_record(f"{BENCH}/run.json", _RUN_STARTED, workflow.dag_settings.targets, workflow.cores)
+        # a run that rebuilt every paper 2D run is a full reproduction: its record is kept apart, so
+        # that a later summary-only rerun does not replace the README's reproduction time
+        runs = [f"{RESULTS}/isph/{c}.nc" for c in PAPER_ISPH_CASES]
+        if runs and all(os.path.isfile(r) and os.path.getmtime(r) >= _RUN_STARTED for r in runs):
+            write_run_record(f"{BENCH}/run_full.json", _RUN_STARTED, workflow.dag_settings.targets, workflow.cores)
 
 
 # The method, in the paper's order:

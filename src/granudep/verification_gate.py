@@ -169,7 +169,14 @@ def chain_dx_lines(table: pd.DataFrame, chain_dx_mm: float = 4.0) -> list[str]:
     out = []
     for r in chain_dx_pairs(table, chain_dx_mm).itertuples():
         unit = " m/s" if "m/s" in r.quantity else ""
-        fmt = (lambda e: f"{e:.3f}{unit}") if unit else (lambda e: f"{100 * e:.1f} %")
+        if "(1 = yes)" in r.quantity:    # a yes/no row (stable or not): its error is 0 or 1, not a percentage
+            def fmt(e):
+                return "yes" if e == 0 else "no"
+        elif "E_0" in r.quantity or "E_ref" in r.quantity:  # an energy excess: a signed fraction of E_ref
+            def fmt(e):
+                return f"{e:.2e} E_ref"
+        else:
+            fmt = (lambda e: f"{e:.3f}{unit}") if unit else (lambda e: f"{100 * e:.1f} %")
         what = pair_key(r.check, r.quantity).split("\t")[1]
         out.append(f"`{r.check}` ({what}): "
                    f"{fmt(r.error)} at {r.dx_mm:g} mm (checked, {r.status}), {fmt(r.chain_error)} at "

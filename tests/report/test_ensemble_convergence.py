@@ -85,3 +85,12 @@ def test_the_spread_of_the_finer_ensemble_counts_too():
     fine = _level(0.002, [("T22-A70", "rest_time", [17.0, 20.0, 25.0])])
     row = convergence_table([coarse, fine]).iloc[0]
     assert row["verdict"].startswith("ill-conditioned: spread 38.")
+
+
+def test_no_robust_rest_measure_is_claimed_when_both_scatter():
+    coarse = _level(0.004, [("T22-A70", "rest_time", [20.0, 22.0, 29.0]),
+                            ("T22-A70", "rest_time_mass99", [19.0, 21.5, 28.0])])
+    fine = _level(0.002, [("T22-A70", "rest_time", [21.0, 23.0, 24.0]),
+                          ("T22-A70", "rest_time_mass99", [19.5, 20.0, 20.2])])
+    r = robust_rest_measure(convergence_table([coarse, fine]), threshold_pct=10.0).iloc[0]
+    assert not r["within_threshold"]

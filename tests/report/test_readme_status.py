@@ -131,3 +131,16 @@ def test_the_calibrated_variant_says_what_was_calibrated_and_scores_the_other_ca
     assert "20.0 % over the 2 cases other than T22-A70" in line
     assert "L_s = 5.10 mm (member minimisers 5.06–5.91 mm" in line
 
+
+
+def test_the_run_line_prefers_the_last_full_reproduction(results):
+    import json
+    bench = results / "benchmarks"
+    bench.mkdir(exist_ok=True)
+    rec = {"started_utc": "s", "ended_utc": "e", "targets": ["all"], "cores": 2, "commit": "abc"}
+    (bench / "run.json").write_text(json.dumps({**rec, "wall_s": 6.0}))
+    line = [ln for ln in status_block(results).splitlines() if "**Last run**" in ln][0]
+    assert "0.1 min" in line and "not a full reproduction" in line
+    (bench / "run_full.json").write_text(json.dumps({**rec, "wall_s": 1052.3}))
+    line = [ln for ln in status_block(results).splitlines() if "**Last run**" in ln][0]
+    assert "17.5 min" in line and "the last full reproduction" in line

@@ -83,7 +83,7 @@ def convergence_table(levels: list[pd.DataFrame], threshold_pct: float = 10.0) -
     return pd.DataFrame(rows, columns=TABLE_COLUMNS)
 
 
-def robust_rest_measure(table: pd.DataFrame) -> pd.DataFrame:
+def robust_rest_measure(table: pd.DataFrame, threshold_pct: float = 10.0) -> pd.DataFrame:
     """Per case: the rest measure (:data:`REST_MEASURES`) whose largest figure of the two spreads and
     |dx change| is smallest, with that figure of each measure."""
     rows = []
@@ -96,7 +96,8 @@ def robust_rest_measure(table: pd.DataFrame) -> pd.DataFrame:
         if not worst:
             continue
         best = min(worst, key=worst.get)
-        rows.append({"case": case, "robust": best, **{f"worst_{k}_pct": v for k, v in worst.items()}})
+        rows.append({"case": case, "robust": best, "within_threshold": bool(worst[best] <= threshold_pct),
+                     **{f"worst_{k}_pct": v for k, v in worst.items()}})
     return pd.DataFrame(rows)
 
 
@@ -146,7 +147,7 @@ def _cmd(args) -> int:
     print(markdown(table))
     write_text(table.to_csv(index=False), args.output)
     if args.robust:
-        write_text(robust_rest_measure(table).to_csv(index=False), args.robust)
+        write_text(robust_rest_measure(table, args.threshold_pct).to_csv(index=False), args.robust)
     return 0
 
 

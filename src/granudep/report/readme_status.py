@@ -43,11 +43,14 @@ def _range(values, fmt=".0f") -> str:
 
 
 def _run(root: Path) -> str:
+    """The last full reproduction's record (run_full.json: every paper 2D run rebuilt), else the last run's."""
     from .run_record import read_run_record
-    rec = read_run_record(root / "benchmarks" / "run.json")
+    name = "run_full.json" if read_run_record(root / "benchmarks" / "run_full.json") is not None else "run.json"
+    rec = read_run_record(root / "benchmarks" / name)
     if rec is None:
         return f"**Last run**: {_missing('benchmarks/run.json')}."
-    return (f"**Last run** (`results/benchmarks/run.json`): `snakemake` targets {', '.join(rec['targets'])} on "
+    what = "the last full reproduction" if name == "run_full.json" else "the last run, not a full reproduction"
+    return (f"**Last run** (`results/benchmarks/{name}`, {what}): `snakemake` targets {', '.join(rec['targets'])} on "
             f"{rec.get('cores')} cores, wall time {float(rec['wall_s']) / 60:.1f} min (the install not included), "
             f"ended {rec.get('ended_utc')}, commit `{str(rec.get('commit'))[:12]}`"
             + (" (uncommitted changes)" if "dirty" in str(rec.get("commit")) else "") + ".")
@@ -236,6 +239,8 @@ def variant_lines(root: Path) -> list[str]:
         if len(rest):
             parts.append("t_s " + ", ".join(f"{case} {_with_spread(rest.iloc[i], '.1f')}"
                                             for i, case in enumerate(rest["case"])))
+        if "fine_dx_mm" in card and not card["fine_dx_mm"].notna().any():
+            parts.append("no claim's dx change measured in this chain (its verdicts read the spread alone)")
         note = f" {CALIBRATED_SENTENCE}.{_calibration(root)}" if vdir.name == "calibrated" else ""
         out.append(f"**Variant `{vdir.name}`** (`config/variants/{vdir.name}.yaml`, outputs in "
                    f"`{vdir.as_posix()}`): " + "; ".join(parts) + "." + note)

@@ -230,8 +230,10 @@ def section_ensemble_convergence(path, robust=None) -> str:
         out.append("")
         out.append("Robust rest measure per case (the smaller of max(spread, |dx change|), chosen by those two "
                    "figures alone): " + "; ".join(
-                       f"{r.case}: `{r.robust}` (" + ", ".join(f"{c[6:-4]} {getattr(r, c):.1f} %" for c in rob.columns
-                                                          if c.startswith("worst_") and pd.notna(getattr(r, c))) + ")"
+                       f"{r.case}: " + (f"`{r.robust}`" if getattr(r, "within_threshold", True) else "neither is well-defined")
+                       + " (" + ", ".join(f"{c[6:-4]} {getattr(r, c):.1f} %" for c in rob.columns
+                                                          if c.startswith("worst_") and pd.notna(getattr(r, c)))
+                       + ")"
                        for r in rob.itertuples()) + ".")
     out.append("")
     return "\n".join(out)
