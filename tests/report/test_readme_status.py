@@ -144,3 +144,16 @@ def test_the_run_line_prefers_the_last_full_reproduction(results):
     (bench / "run_full.json").write_text(json.dumps({**rec, "wall_s": 1052.3}))
     line = [ln for ln in status_block(results).splitlines() if "**Last run**" in ln][0]
     assert "17.5 min" in line and "the last full reproduction" in line
+
+
+def test_the_da_errors_are_also_read_against_every_members_2d_runs(tmp_path):
+    from granudep.report.readme_status import _members_range
+    rows = lambda e0, e1: pd.DataFrame({"reference": ["2D"] * 2, "deposition": [0, 1], "case": ["1D-A70"] * 2,
+                                        "runout_rel_error": [e0, e1]})
+    (tmp_path / "compare").mkdir()
+    rows(0.20, 0.18).to_csv(tmp_path / "compare/comparison.csv", index=False)
+    assert _members_range(tmp_path, "2D") == ""  # one member: nothing to add
+    (tmp_path / "ensemble/m1/compare").mkdir(parents=True)
+    rows(0.30, 0.25).to_csv(tmp_path / "ensemble/m1/compare/comparison.csv", index=False)
+    text = _members_range(tmp_path, "2D")
+    assert "2 ensemble members" in text and "20–30 % without deposition" in text and "18–25 % with it" in text

@@ -243,3 +243,34 @@ rule regress_converged:
         mem_mb=2000,
     shell:
         "granudep regress {input.sections} -o {params.outdir} > {log} 2>&1"
+
+
+# --- The DA-vs-2D errors per ensemble member: the same DA runs read against member k's 2D runs ---
+# (member 0 is the chain's own comparison above). The ensemble rule gathers the members' Fig 16
+# maxima from these, so the DA errors are quoted with the spread the 2D reference carries.
+use rule reference as reference_member with:
+    input:
+        runs=[f"{MEMBERS}/m{{member}}/isph/{REFERENCE_2D[c]}.nc" for c in DA_CASES],
+    output:
+        f"{MEMBERS}/m{{member}}/compare/reference_2d.csv",
+    log:
+        f"{MEMBERS}/m{{member}}/logs/compare/reference.log",
+    benchmark:
+        f"{BENCH}/ensemble/m{{member}}/compare/reference.tsv"
+
+
+use rule compare as compare_member with:
+    input:
+        da=expand(f"{RESULTS}/da/{{case}}_{{variant}}.nc", case=DA_CASES, variant=DA_VARIANTS),
+        readings=READING_FILES,
+        reference=f"{MEMBERS}/m{{member}}/compare/reference_2d.csv",
+        converged=f"{RESULTS}/compare/reference_converged.csv",
+        extra=config["reference_tables"],
+    output:
+        comparison=f"{MEMBERS}/m{{member}}/compare/comparison.csv",
+        matrix=f"{MEMBERS}/m{{member}}/compare/reading_matrix.csv",
+        maxima=f"{MEMBERS}/m{{member}}/compare/reading_matrix_maxima.csv",
+    log:
+        f"{MEMBERS}/m{{member}}/logs/compare/compare.log",
+    benchmark:
+        f"{BENCH}/ensemble/m{{member}}/compare/compare.tsv"

@@ -61,6 +61,8 @@ rule ensemble:
         runs=[member_file(k, "isph", c) for k in MEMBER_IDS for c in PAPER_ISPH_CASES],
         regression=[f"{member_root(k)}/regression/{os.path.basename(p)}" for k in MEMBER_IDS
                     for p in REGRESSION_OUTPUTS],
+        # the DA-vs-2D comparison against each member's 2D runs (compare.smk, compare_member)
+        compare=[f"{member_root(k)}/compare/reading_matrix_maxima.csv" for k in MEMBER_IDS],
     output:
         claims=f"{MEMBERS}/claims_members.csv",
         quantities=f"{MEMBERS}/quantities.csv",

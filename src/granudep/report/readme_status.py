@@ -157,8 +157,23 @@ def _comparison(root: Path) -> list[str]:
         short = 100 * (nd.loc[both, "final_runout_norm"] - dep.loc[both, "final_runout_norm"]) / nd.loc[both, "final_runout_norm"]
         out.append(f"**DA vs {ref}**: runout error {_range(100 * nd['runout_rel_error'])} % without deposition, "
                    f"{_range(100 * dep['runout_rel_error'])} % with it; deposition shortens the DA runout by "
-                   f"{_range(short)} % ({len(both)} cases; the paper: up to 38 %)." + _reference_basis(g))
+                   f"{_range(short)} % ({len(both)} cases; the paper: up to 38 %)." + _members_range(root, ref)
+                   + _reference_basis(g))
     return out
+
+
+def _members_range(root: Path, ref: str) -> str:
+    """The same errors read against every ensemble member's 2D runs (results/ensemble/m*/compare/), with
+    the chain's own (member 0): the spread the 2D reference gives the DA errors."""
+    frames = [_csv(root / "compare" / "comparison.csv")] + [
+        _csv(p) for p in sorted((root / "ensemble").glob("m*/compare/comparison.csv"))]
+    frames = [f[f["reference"] == ref] for f in frames if f is not None and "reference" in f]
+    if len(frames) < 2:
+        return ""
+    both = pd.concat(frames, ignore_index=True)
+    nd, dep = both[both["deposition"] == 0], both[both["deposition"] == 1]
+    return (f" Against each of the {len(frames)} ensemble members' 2D runs: {_range(100 * nd['runout_rel_error'])} % "
+            f"without deposition, {_range(100 * dep['runout_rel_error'])} % with it.")
 
 
 def _reference_basis(g: pd.DataFrame) -> str:
