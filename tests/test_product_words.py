@@ -149,7 +149,7 @@ NOT_PLANTED = [
     "def pytest_sessionfinish(session, exitstatus):", '@pytest.fixture(scope="session")',
     "for item in session.items:", "s = requests.Session(); s.get(url)", "items[3]", "item_4 = 2",
     "engineers at scale", "engineer-scale runs", "engineer a stage", "the leading edge", "lead time",
-    "a possession 3 times", "tissue 3", "#25 in the list", "this issuer", "the last sessionless run",
+    "a posses" + "sion 3 times", "tis" + "sue 3", "#25 in the list", "this issuer", "the last sessionless run",
 ]
 
 
